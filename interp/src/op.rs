@@ -1,0 +1,387 @@
+//! The canonical operation stream: what the interpreter hands to motion.
+//!
+//! Every op is fully resolved: coordinates are absolute, in millimetres and degrees, with all
+//! program transforms (datum shift, mirror, rotation, scaling, INCH → MM) already applied.
+//! Feeds are in mm/s. Each op carries the source location of the block that produced it.
+//! Radius compensation is *not* applied here: ops describe the programmed contour and carry
+//! the compensation state as separate [`OpKind::RadiusComp`] ops; motion offsets the path.
+
+use serde::{Deserialize, Serialize};
+use std::fmt;
+
+/// A programmable axis letter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+pub enum AxisLetter {
+    /// Linear principal axis X.
+    X,
+    /// Linear principal axis Y.
+    Y,
+    /// Linear principal axis Z.
+    Z,
+    /// Rotary axis about X (degrees).
+    A,
+    /// Rotary axis about Y (degrees).
+    B,
+    /// Rotary axis about Z (degrees).
+    C,
+    /// Secondary linear axis parallel to X.
+    U,
+    /// Secondary linear axis parallel to Y.
+    V,
+    /// Secondary linear axis parallel to Z.
+    W,
+}
+
+impl AxisLetter {
+    /// All letters in pose order.
+    pub const ALL: [AxisLetter; 9] = [
+        AxisLetter::X,
+        AxisLetter::Y,
+        AxisLetter::Z,
+        AxisLetter::A,
+        AxisLetter::B,
+        AxisLetter::C,
+        AxisLetter::U,
+        AxisLetter::V,
+        AxisLetter::W,
+    ];
+
+    /// Index of this axis in a [`Pose`].
+    pub const fn index(self) -> usize {
+        self as usize
+    }
+
+    /// True for the rotary axes A, B and C (values in degrees).
+    pub const fn is_rotary(self) -> bool {
+        matches!(self, AxisLetter::A | AxisLetter::B | AxisLetter::C)
+    }
+
+    /// The letter as written in programs.
+    pub const fn as_char(self) -> char {
+        match self {
+            AxisLetter::X => 'X',
+            AxisLetter::Y => 'Y',
+            AxisLetter::Z => 'Z',
+            AxisLetter::A => 'A',
+            AxisLetter::B => 'B',
+            AxisLetter::C => 'C',
+            AxisLetter::U => 'U',
+            AxisLetter::V => 'V',
+            AxisLetter::W => 'W',
+        }
+    }
+
+    /// Parses an axis letter (case-insensitive).
+    pub fn from_char(c: char) -> Option<Self> {
+        AxisLetter::ALL
+            .into_iter()
+            .find(|a| a.as_char() == c.to_ascii_uppercase())
+    }
+}
+
+impl fmt::Display for AxisLetter {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.as_char())
+    }
+}
+
+/// A position of all programmable axes: mm for linear axes, degrees for rotary axes.
+///
+/// Serialized as an object keyed by axis letter; X, Y and Z are always written, the other
+/// axes only when they are not zero.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Pose(pub [f64; 9]);
+
+impl Pose {
+    /// The origin: every axis at zero.
+    pub const ZERO: Pose = Pose([0.0; 9]);
+
+    /// A pose with X, Y, Z set and every other axis at zero.
+    pub const fn xyz(x: f64, y: f64, z: f64) -> Pose {
+        Pose([x, y, z, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0])
+    }
+
+    /// Value of one axis.
+    pub fn get(&self, axis: AxisLetter) -> f64 {
+        self.0[axis.index()]
+    }
+
+    /// Sets one axis.
+    pub fn set(&mut self, axis: AxisLetter, value: f64) {
+        self.0[axis.index()] = value;
+    }
+}
+
+impl std::ops::Index<AxisLetter> for Pose {
+    type Output = f64;
+    fn index(&self, axis: AxisLetter) -> &f64 {
+        &self.0[axis.index()]
+    }
+}
+
+impl std::ops::IndexMut<AxisLetter> for Pose {
+    fn index_mut(&mut self, axis: AxisLetter) -> &mut f64 {
+        &mut self.0[axis.index()]
+    }
+}
+
+impl Serialize for Pose {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(None)?;
+        for a in AxisLetter::ALL {
+            let v = self[a];
+            if a.index() < 3 || v != 0.0 {
+                m.serialize_entry(&a, &v)?;
+            }
+        }
+        m.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for Pose {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let m = std::collections::BTreeMap::<AxisLetter, f64>::deserialize(d)?;
+        let mut p = Pose::ZERO;
+        for (a, v) in m {
+            p[a] = v;
+        }
+        Ok(p)
+    }
+}
+
+/// A working plane, named by its two in-plane axes; the third is the tool axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+pub enum Plane {
+    /// X/Y plane, tool axis Z (G17).
+    XY,
+    /// Z/X plane, tool axis Y (G18).
+    ZX,
+    /// Y/Z plane, tool axis X (G19).
+    YZ,
+}
+
+impl Plane {
+    /// (first in-plane axis, second in-plane axis, normal axis), right-handed: a positive
+    /// (counter-clockwise, DR+) rotation turns the first axis towards the second.
+    pub const fn axes(self) -> (AxisLetter, AxisLetter, AxisLetter) {
+        match self {
+            Plane::XY => (AxisLetter::X, AxisLetter::Y, AxisLetter::Z),
+            Plane::ZX => (AxisLetter::Z, AxisLetter::X, AxisLetter::Y),
+            Plane::YZ => (AxisLetter::Y, AxisLetter::Z, AxisLetter::X),
+        }
+    }
+
+    /// The plane perpendicular to a tool axis (X, Y or Z; None for other letters).
+    pub const fn from_tool_axis(axis: AxisLetter) -> Option<Plane> {
+        match axis {
+            AxisLetter::Z => Some(Plane::XY),
+            AxisLetter::Y => Some(Plane::ZX),
+            AxisLetter::X => Some(Plane::YZ),
+            _ => None,
+        }
+    }
+}
+
+/// How fast a motion op moves.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Feed {
+    /// Rapid traverse (FMAX, G0): as fast as the machine allows.
+    Rapid,
+    /// Path feed in mm/s (the interpreter converts mm/min and inch/min).
+    Rate(f64),
+    /// Feed per spindle revolution in mm (lathe G95, FU).
+    PerRevolution(f64),
+}
+
+/// Side of tool radius compensation, looking in the direction of travel.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CompSide {
+    /// No compensation (R0, G40).
+    Off,
+    /// Tool left of the contour (RL, G41).
+    Left,
+    /// Tool right of the contour (RR, G42).
+    Right,
+}
+
+/// Which spindle an op addresses.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpindleId {
+    /// The main (work or tool) spindle.
+    Main,
+    /// A driven tool on a lathe turret (G197, M103/M104).
+    Driven,
+}
+
+/// Spindle rotation command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpindleDir {
+    /// Clockwise (M3).
+    Cw,
+    /// Counter-clockwise (M4).
+    Ccw,
+    /// Stopped (M5).
+    Off,
+}
+
+/// Spindle speed setting.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SpindleSpeed {
+    /// Revolutions per minute.
+    Rpm(f64),
+    /// Constant cutting speed in m/min (lathe G96).
+    SurfaceSpeed(f64),
+}
+
+/// Coefficients of one axis of a spline block: `K3, K2, K1` as written in the program.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct SplineAxis {
+    /// The axis.
+    pub axis: AxisLetter,
+    /// `[K3, K2, K1]`.
+    pub k: [f64; 3],
+}
+
+/// Where an op came from in the program text.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+pub struct SourceLoc {
+    /// Index of the file in the interpreter's file table (0 = the main program).
+    pub file: u16,
+    /// 1-based line of the block's first character.
+    pub line: u32,
+    /// 1-based column (in characters) of the block's first character.
+    pub col: u32,
+    /// The block number written in the program, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub block: Option<u64>,
+}
+
+/// One canonical operation.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Op {
+    /// The operation.
+    #[serde(flatten)]
+    pub kind: OpKind,
+    /// The block that produced it.
+    pub loc: SourceLoc,
+}
+
+/// The canonical operations.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "op", rename_all = "snake_case")]
+pub enum OpKind {
+    /// Straight line in all axes from `from` to `to` (rapid when `feed` is [`Feed::Rapid`]).
+    Line {
+        /// Start (the previous end point).
+        from: Pose,
+        /// End point.
+        to: Pose,
+        /// Feed.
+        feed: Feed,
+    },
+    /// Circular arc in `plane` about `center`, or a helix when the normal axis also moves.
+    ///
+    /// The radius is the distance from `from` to `center` in the plane. `sweep` is the signed
+    /// angle travelled in degrees (positive = counter-clockwise = DR+), may exceed 360° for
+    /// helices and full circles; the in-plane position at the end equals `to`. The normal axis
+    /// and any other axes move linearly with the angle.
+    Arc {
+        /// Start (the previous end point).
+        from: Pose,
+        /// End point.
+        to: Pose,
+        /// Centre in the plane: (first axis, second axis) of [`Plane::axes`].
+        center: [f64; 2],
+        /// The plane of the circle.
+        plane: Plane,
+        /// Signed angle in degrees, positive counter-clockwise.
+        sweep: f64,
+        /// Feed.
+        feed: Feed,
+    },
+    /// Cubic polynomial per axis (SPL): `P(t) = K3·t³ + K2·t² + K1·t + to`, t from 1 to 0.
+    /// Axes without coefficients stay where they are.
+    Spline {
+        /// Start (equals the polynomial at t = 1 within 1 µm).
+        from: Pose,
+        /// End point (t = 0).
+        to: Pose,
+        /// Coefficients per axis.
+        axes: Vec<SplineAxis>,
+        /// Feed.
+        feed: Feed,
+    },
+    /// Wait without motion.
+    Dwell {
+        /// Seconds.
+        seconds: f64,
+    },
+    /// Tool change: the active tool and its compensation data from now on.
+    ToolChange {
+        /// Tool number.
+        tool: u32,
+        /// Tool name, if known.
+        #[serde(skip_serializing_if = "Option::is_none")]
+        name: Option<String>,
+        /// Tool axis (defines the working plane).
+        axis: AxisLetter,
+        /// Tool length including DL, mm.
+        length: f64,
+        /// Tool radius including DR, mm.
+        radius: f64,
+    },
+    /// Spindle command.
+    Spindle {
+        /// Which spindle.
+        spindle: SpindleId,
+        /// Direction or stop.
+        dir: SpindleDir,
+        /// Speed (kept while stopped).
+        speed: SpindleSpeed,
+    },
+    /// Coolant on or off.
+    Coolant {
+        /// True for on.
+        on: bool,
+    },
+    /// Start, change or end of tool radius compensation for the following motion ops.
+    RadiusComp {
+        /// Side.
+        side: CompSide,
+    },
+    /// Path tolerance for blending; `None` returns to the machine default.
+    Tolerance {
+        /// Tolerance in mm.
+        mm: Option<f64>,
+    },
+    /// Come to a full stop at the end of the previous motion before continuing.
+    ExactStop,
+    /// C axis mode of a lathe main spindle on (position-controlled) or off (M14/M15).
+    CAxis {
+        /// True when the spindle becomes the C axis.
+        on: bool,
+    },
+    /// Program stop (M0, STOP) or optional stop (M1): motion halts until resumed.
+    Stop {
+        /// True for M1 (only when optional stop is switched on).
+        optional: bool,
+    },
+    /// End of the program (M2, M30, END PGM).
+    End,
+}
+
+impl OpKind {
+    /// True for ops that move axes.
+    pub fn is_motion(&self) -> bool {
+        matches!(
+            self,
+            OpKind::Line { .. } | OpKind::Arc { .. } | OpKind::Spline { .. }
+        )
+    }
+}

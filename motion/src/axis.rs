@@ -1,0 +1,155 @@
+//! The axis boundary: what every backend (simulated axes, CANopen drives, Modbus drives,
+//! step/dir outputs) implements, and what the runtime calls once per servo cycle.
+//!
+//! A backend serves one or more machine axes, indexed `0..axis_count()` in the order the
+//! runtime assigned them. The runtime never plans inside [`AxisBackend::cycle`]: it hands
+//! over one [`Setpoint`] per axis and reads one [`AxisFeedback`] per axis back.
+
+use std::fmt;
+
+/// The commanded state of one axis for one servo cycle (machine units: mm or degrees).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Setpoint {
+    /// Commanded position.
+    pub position: f64,
+    /// Commanded velocity (units/s), for velocity feed-forward.
+    pub velocity: f64,
+    /// Commanded acceleration (units/s²), for acceleration feed-forward.
+    pub acceleration: f64,
+}
+
+/// The power/operating state an axis reports.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AxisState {
+    /// Not powered; does not follow setpoints.
+    #[default]
+    Disabled,
+    /// Powered and following setpoints.
+    Enabled,
+    /// Running its homing sequence.
+    Homing,
+    /// Stopped by a fault; needs [`AxisBackend::reset_fault`].
+    Faulted,
+}
+
+/// A fault reported by an axis.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AxisFault {
+    /// Following error beyond the configured window (mm or degrees).
+    FollowingError(f64),
+    /// A hardware limit switch was hit (true: positive end).
+    LimitSwitch {
+        /// True for the positive end of travel.
+        positive: bool,
+    },
+    /// The drive reported a fault with a code (e.g. a CiA 402 / EMCY error code).
+    Drive {
+        /// Vendor or profile error code.
+        code: u32,
+        /// Human-readable description.
+        text: String,
+    },
+    /// The emergency stop chain is open.
+    EStop,
+    /// Communication with the drive was lost.
+    CommunicationLost,
+}
+
+impl fmt::Display for AxisFault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            AxisFault::FollowingError(e) => write!(f, "following error {e:.4} beyond limit"),
+            AxisFault::LimitSwitch { positive: true } => write!(f, "positive limit switch"),
+            AxisFault::LimitSwitch { positive: false } => write!(f, "negative limit switch"),
+            AxisFault::Drive { code, text } => write!(f, "drive fault 0x{code:04X}: {text}"),
+            AxisFault::EStop => write!(f, "emergency stop"),
+            AxisFault::CommunicationLost => write!(f, "communication lost"),
+        }
+    }
+}
+
+/// What one axis reports back each cycle.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct AxisFeedback {
+    /// Measured position (after encoder quantisation), mm or degrees.
+    pub position: f64,
+    /// Commanded minus measured position.
+    pub following_error: f64,
+    /// Operating state.
+    pub state: AxisState,
+    /// True once the axis has a valid reference.
+    pub homed: bool,
+    /// The active fault, if any.
+    pub fault: Option<AxisFault>,
+}
+
+/// A failure of the backend itself (not of an axis): transport errors, bad arguments.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BackendError {
+    /// The axis index is not served by this backend.
+    #[error("axis index {0} is not served by this backend")]
+    NoSuchAxis(usize),
+    /// Setpoint/feedback slices do not match the number of axes.
+    #[error("expected {expected} axes, got {got}")]
+    AxisCount {
+        /// Axes served.
+        expected: usize,
+        /// Slice length given.
+        got: usize,
+    },
+    /// Transport failure (bus, serial line) with a description.
+    #[error("communication: {0}")]
+    Communication(String),
+    /// The backend refused the request in its current state.
+    #[error("not possible now: {0}")]
+    InvalidState(String),
+}
+
+/// A backend driving one or more machine axes.
+pub trait AxisBackend {
+    /// Number of axes served.
+    fn axis_count(&self) -> usize;
+
+    /// Powers all axes so they follow setpoints.
+    fn enable(&mut self) -> Result<(), BackendError>;
+
+    /// Removes power from all axes (after a controlled stop).
+    fn disable(&mut self) -> Result<(), BackendError>;
+
+    /// Starts the homing sequence of one axis; progress shows in [`AxisFeedback::state`]
+    /// and [`AxisFeedback::homed`].
+    fn start_homing(&mut self, axis: usize) -> Result<(), BackendError>;
+
+    /// Clears the fault of one axis if its cause is gone.
+    fn reset_fault(&mut self, axis: usize) -> Result<(), BackendError>;
+
+    /// One servo cycle at time `t` (seconds since start): hand over `setpoints`
+    /// (one per axis) and fill `feedback` (one per axis).
+    fn cycle(
+        &mut self,
+        t: f64,
+        setpoints: &[Setpoint],
+        feedback: &mut [AxisFeedback],
+    ) -> Result<(), BackendError>;
+}
+
+/// What a spindle reports back.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SpindleFeedback {
+    /// Measured speed in rpm, signed: positive clockwise (M3), negative counter-clockwise (M4).
+    pub rpm: f64,
+    /// True when the measured speed is within the at-speed window of the command.
+    pub at_speed: bool,
+    /// The active fault, if any.
+    pub fault: Option<AxisFault>,
+}
+
+/// A spindle drive (simulated, Modbus VFD, or a CiA 402 drive in velocity mode).
+pub trait SpindleBackend {
+    /// Commands a signed speed in rpm: positive clockwise (M3), negative counter-clockwise
+    /// (M4), zero stops (M5).
+    fn command(&mut self, rpm: f64) -> Result<(), BackendError>;
+
+    /// Advances by one servo cycle at time `t` and reports the spindle's state.
+    fn cycle(&mut self, t: f64) -> Result<SpindleFeedback, BackendError>;
+}

@@ -1,0 +1,1 @@
+//! Simulated axes behind the axis boundary trait.

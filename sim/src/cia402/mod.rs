@@ -1,0 +1,1 @@
+//! A simulated CANopen CiA 402 servo drive.

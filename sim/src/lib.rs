@@ -1,0 +1,12 @@
+//! klar-sim: simulated axes and devices behind [`klar_motion::AxisBackend`].
+//!
+//! - [`plant`]: the servo plant (mass, friction, position controller, encoder) every
+//!   simulated axis and drive is built on.
+//! - [`axis`]: simulated axes as an [`klar_motion::AxisBackend`].
+//! - [`cia402`]: a simulated CANopen CiA 402 drive.
+//! - [`modbus`]: simulated Modbus RTU devices (servo drive, spindle VFD).
+
+pub mod axis;
+pub mod cia402;
+pub mod modbus;
+pub mod plant;
