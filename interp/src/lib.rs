@@ -1,9 +1,23 @@
 //! klar-interp: HEIDENHAIN program text → canonical [`op::Op`] stream.
 //!
-//! Dialects: TNC conversational Klartext (`.h`), TNC ISO (`.i`) and lathe DIN (`.nc`).
-//! The interpreter streams: it reads a block, executes it against its modal state and emits
-//! the resulting ops, each with the source location of its block.
+//! Dialects: TNC conversational Klartext (`.h`), TNC ISO (`.i`) and lathe DIN (`.nc`); this
+//! version runs Klartext and recognises the other two. The interpreter streams: it reads a
+//! block, executes it against its modal state and emits the resulting ops, each with the
+//! source location of its block, so memory use does not grow with the program.
 
+pub mod diag;
+pub mod dialect;
+pub mod din;
+mod interpreter;
+pub mod iso;
+pub(crate) mod klartext;
 pub mod op;
+mod source;
 
-pub use op::{AxisLetter, CompSide, Feed, Op, OpKind, Plane, Pose, SourceLoc};
+pub use diag::{Diagnostic, ProgramError};
+pub use dialect::{Dialect, detect_dialect};
+pub use interpreter::{Interpreter, check, syntax_check};
+pub use klartext::exec::{Blank, C_RADIUS_TOLERANCE, MAX_IPA};
+pub use op::{
+    ApproachShape, AxisLetter, CompSide, Feed, Op, OpKind, Plane, Pose, SourceLoc, SplineAxis,
+};

@@ -239,6 +239,37 @@ pub enum SpindleSpeed {
     SurfaceSpeed(f64),
 }
 
+/// The path shape of an APPR or DEP block (HEIDENHAIN approach/departure functions).
+///
+/// The constructions (auxiliary point PH, tangent arcs) are made on the compensated tool path
+/// by the radius-compensation stage, which sees the first (or last) contour element.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "shape", rename_all = "snake_case")]
+pub enum ApproachShape {
+    /// LT: straight line tangent to the contour element, `len` long.
+    LineTangent {
+        /// Length of the line (LEN), mm.
+        len: f64,
+    },
+    /// LN: straight line perpendicular to the contour element, `len` long.
+    LineNormal {
+        /// Length of the line (LEN), mm.
+        len: f64,
+    },
+    /// CT: circular arc tangent to the contour element.
+    CircleTangent {
+        /// Central angle of the arc (CCA), degrees.
+        cca: f64,
+        /// Radius (R), mm; the sign selects the side as the manual defines.
+        radius: f64,
+    },
+    /// LCT: straight line to an auxiliary point, then an arc tangent to both.
+    LineCircleTangent {
+        /// Radius (R), mm.
+        radius: f64,
+    },
+}
+
 /// Coefficients of one axis of a spline block: `K3, K2, K1` as written in the program.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct SplineAxis {
@@ -317,6 +348,41 @@ pub enum OpKind {
         /// Feed.
         feed: Feed,
     },
+    /// APPR: approach the first contour point `to` (PA) from `from` (PS) and switch radius
+    /// compensation on to `side`. Resolved into lines and arcs by the compensation stage.
+    Approach {
+        /// Start point PS (the previous end point).
+        from: Pose,
+        /// First contour point PA, as programmed (on the contour).
+        to: Pose,
+        /// Path shape.
+        shape: ApproachShape,
+        /// Compensation side switched on (Left or Right).
+        side: CompSide,
+        /// Feed from PS to PH (LT/LN/CT: the last feed before the block; LCT: the block's feed).
+        feed_to_aux: Feed,
+        /// Feed from PH to PA (the block's feed).
+        feed: Feed,
+        /// Working plane.
+        plane: Plane,
+        /// True when the block programs the tool axis too: all axes move to PH together,
+        /// then only the working plane to PA.
+        with_tool_axis: bool,
+    },
+    /// DEP: leave the contour from `from` (PE) and switch radius compensation off.
+    /// `to` is the end point PN where the block programs one (LCT), else it is computed.
+    Depart {
+        /// Last contour point PE (the previous end point).
+        from: Pose,
+        /// End point PN when programmed.
+        to: Option<Pose>,
+        /// Path shape.
+        shape: ApproachShape,
+        /// Feed.
+        feed: Feed,
+        /// Working plane.
+        plane: Plane,
+    },
     /// Wait without motion.
     Dwell {
         /// Seconds.
@@ -381,7 +447,11 @@ impl OpKind {
     pub fn is_motion(&self) -> bool {
         matches!(
             self,
-            OpKind::Line { .. } | OpKind::Arc { .. } | OpKind::Spline { .. }
+            OpKind::Line { .. }
+                | OpKind::Arc { .. }
+                | OpKind::Spline { .. }
+                | OpKind::Approach { .. }
+                | OpKind::Depart { .. }
         )
     }
 }

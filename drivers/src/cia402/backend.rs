@@ -1,0 +1,396 @@
+//! [`Cia402Backend`]: CiA 402 servo drives on one CANopen bus as a
+//! [`klar_motion::AxisBackend`], one machine axis per drive, in cyclic synchronous position
+//! mode, with homing by the drive.
+//!
+//! Enable, disable and fault reset run the CiA 402 power state machine through a few
+//! PDO/SYNC exchanges and return when the drives got there (bounded by the configured state
+//! timeout). A fault of any drive stops every drive (see [`super::network`]).
+
+use std::sync::{Arc, Mutex, MutexGuard};
+
+use klar_motion::{AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError, Setpoint};
+
+use super::config::CanOpenConfig;
+use super::network::{Cia402Error, DriveKind, Homing, Network};
+use super::objects::{MODE_HOMING, MODE_PROFILE_POSITION};
+use super::setup::open_bus;
+use super::spindle::Cia402Spindle;
+use super::state::*;
+use crate::can::CanBus;
+use crate::canopen::{Emergency, Master};
+
+/// CiA 402 drives on one CANopen bus, serving one machine axis each (and optionally a
+/// spindle, reached through [`Cia402Backend::spindle`]).
+pub struct Cia402Backend {
+    net: Arc<Mutex<Network>>,
+}
+
+pub(crate) fn lock(net: &Mutex<Network>) -> MutexGuard<'_, Network> {
+    // The network holds no invariant a panic elsewhere could break half-way that matters
+    // more than stopping the machine, so a poisoned lock is taken over.
+    net.lock().unwrap_or_else(|p| p.into_inner())
+}
+
+impl Cia402Backend {
+    /// Opens the bus the configuration names (SocketCAN or slcan) and starts the drives.
+    /// A simulated bus is built by `klar_sim::cia402::simulated_backend` instead.
+    pub fn open(config: &CanOpenConfig, servo_period: f64) -> Result<Self, Cia402Error> {
+        let bus = open_bus(config)?;
+        Self::with_bus(config, servo_period, bus)
+    }
+
+    /// Starts the drives of `config` on `bus` with SYNC every `servo_period` seconds.
+    pub fn with_bus(
+        config: &CanOpenConfig,
+        servo_period: f64,
+        bus: Box<dyn CanBus>,
+    ) -> Result<Self, Cia402Error> {
+        let net = Network::start(config, servo_period, bus)?;
+        Ok(Self {
+            net: Arc::new(Mutex::new(net)),
+        })
+    }
+
+    /// The spindle drive on this bus, if the configuration has one. Its cyclic exchange
+    /// happens in the axes' [`AxisBackend::cycle`] (or in its own cycle when the bus has
+    /// no axes).
+    pub fn spindle(&self) -> Option<Cia402Spindle> {
+        let has = lock(&self.net)
+            .drives
+            .iter()
+            .any(|d| d.kind == DriveKind::Spindle);
+        has.then(|| Cia402Spindle::new(Arc::clone(&self.net)))
+    }
+
+    /// Why all drives were stopped, naming the node, until faults are reset.
+    pub fn stop_report(&self) -> Option<String> {
+        lock(&self.net).stop.clone()
+    }
+
+    /// The CiA 402 power state of each drive, axes in order, then the spindle.
+    pub fn power_states(&self) -> Vec<PowerState> {
+        lock(&self.net).drives.iter().map(|d| d.power()).collect()
+    }
+
+    /// The last emergency each drive sent, axes in order, then the spindle.
+    pub fn last_emergencies(&self) -> Vec<Option<Emergency>> {
+        lock(&self.net)
+            .drives
+            .iter()
+            .map(|d| d.last_emcy.clone())
+            .collect()
+    }
+
+    /// Runs `f` with the CANopen master (for diagnostics: SDO access to the drives, NMT).
+    pub fn with_master<R>(&self, f: impl FnOnce(&mut Master) -> R) -> R {
+        f(&mut lock(&self.net).master)
+    }
+}
+
+impl Network {
+    fn enable_axes(&mut self) -> Result<(), BackendError> {
+        if let Some(stop) = &self.stop {
+            return Err(BackendError::InvalidState(format!(
+                "stopped ({stop}); reset faults first"
+            )));
+        }
+        let modes: Vec<(u8, i8)> = self
+            .drives
+            .iter()
+            .take(self.axes)
+            .map(|d| (d.node, d.mode))
+            .collect();
+        for (node, mode) in modes {
+            self.set_mode(node, mode)
+                .map_err(|e| BackendError::Communication(e.to_string()))?;
+        }
+        for d in self.drives.iter_mut() {
+            d.homing = Homing::Idle;
+        }
+        self.drive_sequence(
+            None,
+            |d| step_towards_enabled(d.power()).or(Some(CW_ENABLE_OPERATION)),
+            |d| d.power() == PowerState::OperationEnabled,
+        )?;
+        let axes = self.axes;
+        for d in self.drives.iter_mut().take(axes) {
+            d.controlword = CW_ENABLE_OPERATION;
+            d.commanded = d.scaling.to_units(d.actual);
+        }
+        match &self.stop {
+            Some(stop) => Err(BackendError::InvalidState(stop.clone())),
+            None => Ok(()),
+        }
+    }
+
+    fn disable_axes(&mut self) -> Result<(), BackendError> {
+        self.drive_sequence(
+            None,
+            |d| match d.power() {
+                PowerState::OperationEnabled | PowerState::SwitchedOn => Some(CW_SHUTDOWN),
+                PowerState::QuickStopActive => Some(CW_DISABLE_VOLTAGE),
+                _ => None,
+            },
+            |d| {
+                !matches!(
+                    d.power(),
+                    PowerState::OperationEnabled
+                        | PowerState::SwitchedOn
+                        | PowerState::QuickStopActive
+                )
+            },
+        )
+    }
+
+    fn start_homing_axis(&mut self, axis: usize) -> Result<(), BackendError> {
+        let d = self
+            .drives
+            .get(axis)
+            .filter(|_| axis < self.axes)
+            .ok_or(BackendError::NoSuchAxis(axis))?;
+        if let Some(stop) = &self.stop {
+            return Err(BackendError::InvalidState(format!("stopped ({stop})")));
+        }
+        let node = d.node;
+        if !d.has_homing {
+            return Err(BackendError::InvalidState(format!(
+                "node {node}: no homing configured"
+            )));
+        }
+        if d.power() != PowerState::OperationEnabled {
+            return Err(BackendError::InvalidState(format!(
+                "node {node}: not enabled"
+            )));
+        }
+        self.set_mode(node, MODE_HOMING)
+            .map_err(|e| BackendError::Communication(e.to_string()))?;
+        if let Some(d) = self.drives.get_mut(axis) {
+            d.controlword = CW_ENABLE_OPERATION;
+            d.homing = Homing::Arming;
+            d.homed = false;
+        }
+        Ok(())
+    }
+
+    /// Resets the fault of drive `index` (an axis or the spindle).
+    pub(crate) fn reset_drive_fault(&mut self, index: usize) -> Result<(), BackendError> {
+        let node = self
+            .drives
+            .get(index)
+            .ok_or(BackendError::NoSuchAxis(index))?
+            .node;
+        // Bit 7 must rise: send it low, then high, then low again.
+        let mut phase = 0u8;
+        self.drive_sequence(
+            Some(index),
+            |d| {
+                phase = phase.saturating_add(1);
+                match (phase, d.power()) {
+                    (1, _) => Some(CW_DISABLE_VOLTAGE),
+                    (_, p) if p.is_fault() => Some(if phase.is_multiple_of(2) {
+                        CW_FAULT_RESET
+                    } else {
+                        CW_DISABLE_VOLTAGE
+                    }),
+                    _ => Some(CW_DISABLE_VOLTAGE),
+                }
+            },
+            |d| {
+                d.missed == 0
+                    && d.seen
+                    && !d.power().is_fault()
+                    && d.power() != PowerState::QuickStopActive
+                    && d.power() != PowerState::OperationEnabled
+            },
+        )?;
+        if let Some(d) = self.drives.get_mut(index) {
+            d.fault = None;
+            d.secondary = false;
+            d.last_emcy = None;
+            d.controlword = CW_DISABLE_VOLTAGE;
+        }
+        if let Some(t) = self.heartbeat_timeout {
+            self.master.watch_heartbeat(node, t);
+        }
+        // Once the axes are clear, a spindle that was only stopped with them is clear too
+        // (it stays off until commanded again).
+        let axes_clear = self
+            .drives
+            .iter()
+            .take(self.axes)
+            .all(|d| d.fault.is_none());
+        for d in self.drives.iter_mut().skip(self.axes) {
+            if axes_clear && d.secondary {
+                d.fault = None;
+                d.secondary = false;
+            }
+        }
+        if self.drives.iter().all(|d| d.fault.is_none()) {
+            self.stop = None;
+        }
+        Ok(())
+    }
+
+    /// One servo cycle at `t`: axis setpoints (one per axis) and the spindle command go
+    /// out, feedback comes in.
+    pub(crate) fn cycle(&mut self, t: f64, setpoints: &[Setpoint]) {
+        self.master.set_time(t);
+        if let Err(e) = self.master.poll() {
+            self.stop_all(
+                None,
+                AxisFault::CommunicationLost,
+                format!("CAN receive failed: {e}"),
+            );
+        }
+        self.handle_events();
+        let mut out_of_range = None;
+        let stopped = self.stop.is_some();
+        let ramp = self.spindle_ramp_step;
+        for (i, d) in self.drives.iter_mut().enumerate() {
+            match d.kind {
+                DriveKind::Axis => {
+                    let following = d.power() == PowerState::OperationEnabled
+                        && d.homing == Homing::Idle
+                        && is_enable_operation(d.controlword);
+                    match setpoints.get(i) {
+                        Some(sp) if following && !stopped => match d.scaling.to_counts(sp.position)
+                        {
+                            Ok(c) if d.mode == MODE_PROFILE_POSITION => {
+                                d.commanded = sp.position;
+                                d.velocity = sp.velocity;
+                                profile_setpoint(d, c);
+                            }
+                            Ok(c) => {
+                                d.target = c;
+                                d.commanded = sp.position;
+                                d.velocity = sp.velocity;
+                            }
+                            Err(e) => out_of_range = Some((i, format!("node {}: {e}", d.node))),
+                        },
+                        _ if d.mode == MODE_PROFILE_POSITION => {
+                            // Without a fresh set-point the drive keeps its last target.
+                            d.controlword &= !(CW_NEW_SETPOINT | CW_CHANGE_IMMEDIATELY);
+                        }
+                        _ => d.target = d.actual,
+                    }
+                }
+                DriveKind::Spindle if !stopped && d.fault.is_none() => {
+                    let wanted = d.commanded != 0.0 || d.power() == PowerState::OperationEnabled;
+                    if wanted {
+                        d.controlword =
+                            step_towards_enabled(d.power()).unwrap_or(CW_ENABLE_OPERATION);
+                    }
+                    // `velocity` holds the ramped speed (rpm) on its way to the command.
+                    if d.power() == PowerState::OperationEnabled {
+                        let step = (d.commanded - d.velocity).clamp(-ramp, ramp);
+                        d.velocity += step;
+                    } else {
+                        d.velocity = 0.0;
+                    }
+                    d.target = if d.power() == PowerState::OperationEnabled {
+                        match d.scaling.to_counts(d.velocity) {
+                            Ok(c) => c,
+                            Err(e) => {
+                                out_of_range = Some((i, format!("spindle node {}: {e}", d.node)));
+                                0
+                            }
+                        }
+                    } else {
+                        0
+                    };
+                }
+                DriveKind::Spindle => {}
+            }
+        }
+        if let Some((i, cause)) = out_of_range {
+            self.stop_all(
+                Some(i),
+                AxisFault::Drive {
+                    code: 0,
+                    text: cause.clone(),
+                },
+                cause,
+            );
+        }
+        self.apply_stop();
+        self.exchange();
+        self.handle_events();
+        self.evaluate();
+        self.apply_stop();
+    }
+}
+
+/// The profile-position handshake for one cycle: a new target goes out with a rising
+/// "new set-point" bit (and "change set immediately"); the bit drops once the drive
+/// acknowledges (statusword bit 12), and the next target waits until the acknowledge is gone.
+fn profile_setpoint(d: &mut super::network::Drive, wanted: i32) {
+    let acknowledged = d.status & SW_OMS1 != 0;
+    if d.controlword & CW_NEW_SETPOINT != 0 {
+        if acknowledged {
+            d.controlword &= !(CW_NEW_SETPOINT | CW_CHANGE_IMMEDIATELY);
+        }
+    } else if !acknowledged && wanted != d.target {
+        d.target = wanted;
+        d.controlword |= CW_NEW_SETPOINT | CW_CHANGE_IMMEDIATELY;
+    }
+}
+
+impl AxisBackend for Cia402Backend {
+    fn axis_count(&self) -> usize {
+        lock(&self.net).axes
+    }
+
+    fn enable(&mut self) -> Result<(), BackendError> {
+        lock(&self.net).enable_axes()
+    }
+
+    fn disable(&mut self) -> Result<(), BackendError> {
+        lock(&self.net).disable_axes()
+    }
+
+    fn start_homing(&mut self, axis: usize) -> Result<(), BackendError> {
+        lock(&self.net).start_homing_axis(axis)
+    }
+
+    fn reset_fault(&mut self, axis: usize) -> Result<(), BackendError> {
+        let mut net = lock(&self.net);
+        if axis >= net.axes {
+            return Err(BackendError::NoSuchAxis(axis));
+        }
+        net.reset_drive_fault(axis)
+    }
+
+    fn cycle(
+        &mut self,
+        t: f64,
+        setpoints: &[Setpoint],
+        feedback: &mut [AxisFeedback],
+    ) -> Result<(), BackendError> {
+        let mut net = lock(&self.net);
+        let n = net.axes;
+        if setpoints.len() != n || feedback.len() != n {
+            return Err(BackendError::AxisCount {
+                expected: n,
+                got: setpoints.len().min(feedback.len()),
+            });
+        }
+        net.cycle(t, setpoints);
+        for (d, fb) in net.drives.iter().zip(feedback.iter_mut()) {
+            let position = d.scaling.to_units(d.actual);
+            fb.position = position;
+            fb.following_error = d.commanded - position;
+            fb.homed = d.homed;
+            fb.fault = d.fault.clone();
+            fb.state = if d.fault.is_some() || d.power().is_fault() {
+                AxisState::Faulted
+            } else if d.homing != Homing::Idle {
+                AxisState::Homing
+            } else if d.power() == PowerState::OperationEnabled {
+                AxisState::Enabled
+            } else {
+                AxisState::Disabled
+            };
+        }
+        Ok(())
+    }
+}

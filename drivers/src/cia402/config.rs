@@ -1,0 +1,221 @@
+//! Configuration of a CANopen bus with CiA 402 drives, as it appears in the machine TOML.
+
+use serde::Deserialize;
+
+/// One CAN bus with its CiA 402 drives (one drive per machine axis, in axis order).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CanOpenConfig {
+    /// How the bus is reached.
+    pub bus: BusConfig,
+    /// The drives, in the order of the axes this backend serves.
+    #[serde(default)]
+    pub drives: Vec<DriveConfig>,
+    /// A spindle drive on the same bus (cyclic synchronous velocity mode).
+    #[serde(default)]
+    pub spindle: Option<SpindleConfig>,
+    /// SDO answer timeout, ms.
+    #[serde(default = "default_sdo_timeout_ms")]
+    pub sdo_timeout_ms: u64,
+    /// Time allowed for all boot-up messages after the reset, ms.
+    #[serde(default = "default_boot_timeout_ms")]
+    pub boot_timeout_ms: u64,
+    /// Heartbeat period the drives are told to produce (object 0x1017), ms; 0 disables
+    /// heartbeat supervision.
+    #[serde(default = "default_heartbeat_ms")]
+    pub heartbeat_ms: u16,
+    /// Silence after which a drive counts as lost, ms (default: three heartbeat periods).
+    #[serde(default)]
+    pub heartbeat_timeout_ms: Option<u64>,
+    /// How long each servo cycle waits for the drives' transmit PDOs after SYNC, ms
+    /// (default: one servo period).
+    #[serde(default)]
+    pub pdo_wait_ms: Option<f64>,
+    /// Consecutive cycles without a valid transmit PDO from a drive before it counts as lost.
+    #[serde(default = "default_max_missed")]
+    pub max_missed_pdos: u32,
+    /// Time allowed for enable, disable and fault reset sequences, ms.
+    #[serde(default = "default_state_timeout_ms")]
+    pub state_timeout_ms: u64,
+}
+
+/// How the CAN bus is reached.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "adapter", rename_all = "lowercase", deny_unknown_fields)]
+pub enum BusConfig {
+    /// A Linux SocketCAN interface; its bitrate is set with `ip link`, and given here for
+    /// the bus-load check.
+    Socketcan {
+        /// Interface name, e.g. `can0`.
+        interface: String,
+        /// Bitrate in bit/s.
+        bitrate: u32,
+    },
+    /// An slcan (Lawicel) adapter on a serial port.
+    Slcan {
+        /// Serial device, e.g. `/dev/ttyACM0`.
+        port: String,
+        /// Bitrate in bit/s.
+        bitrate: u32,
+        /// Serial line speed (USB adapters ignore it).
+        #[serde(default = "default_serial_baud")]
+        serial_baud: u32,
+    },
+    /// Simulated drives on an in-memory bus (built by `klar_sim::cia402`).
+    Sim {
+        /// Bitrate in bit/s, for the bus-load check.
+        #[serde(default = "default_bitrate")]
+        bitrate: u32,
+    },
+}
+
+impl BusConfig {
+    /// The bitrate in bit/s.
+    pub fn bitrate(&self) -> u32 {
+        match self {
+            BusConfig::Socketcan { bitrate, .. }
+            | BusConfig::Slcan { bitrate, .. }
+            | BusConfig::Sim { bitrate } => *bitrate,
+        }
+    }
+}
+
+/// One CiA 402 drive.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveConfig {
+    /// CANopen node ID, 1..=127.
+    pub node: u8,
+    /// Encoder counts per mm (linear axis) or per degree (rotary axis), at the load.
+    pub counts_per_unit: f64,
+    /// True when positive counts move the axis in its negative direction.
+    #[serde(default)]
+    pub invert: bool,
+    /// Following error window the drive enforces (object 0x6065), mm or degrees.
+    #[serde(default)]
+    pub following_error_window: Option<f64>,
+    /// Homing: method and speeds (written to 0x6098, 0x6099, 0x609A, 0x607C).
+    #[serde(default)]
+    pub homing: Option<HomingConfig>,
+    /// Mode of operation: cyclic synchronous position (the default) or profile position
+    /// for slow auxiliary axes.
+    #[serde(default)]
+    pub mode: AxisMode,
+    /// Profile position: velocity of the drive's own profile (0x6081), mm/s or degrees/s.
+    #[serde(default)]
+    pub profile_velocity: Option<f64>,
+    /// Profile position: acceleration and deceleration of the drive's own profile
+    /// (0x6083, 0x6084), mm/s² or degrees/s².
+    #[serde(default)]
+    pub profile_acceleration: Option<f64>,
+    /// Receive PDO number used for controlword, target position and mode (1..=4).
+    #[serde(default = "default_pdo_number")]
+    pub rpdo: u16,
+    /// Transmit PDO number used for statusword, actual position and mode display (1..=4).
+    #[serde(default = "default_pdo_number")]
+    pub tpdo: u16,
+}
+
+/// How an axis drive follows the setpoints.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AxisMode {
+    /// Cyclic synchronous position: a new target every SYNC, interpolated by the drive.
+    #[default]
+    Csp,
+    /// Profile position: the drive moves to the latest target on its own profile
+    /// (velocity and acceleration from the configuration); for slow auxiliary axes.
+    Pp,
+}
+
+/// A CiA 402 drive used as the spindle, in cyclic synchronous velocity mode.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpindleConfig {
+    /// CANopen node ID, 1..=127.
+    pub node: u8,
+    /// Encoder counts per spindle revolution (at the spindle, gearing included).
+    pub counts_per_rev: f64,
+    /// True when positive counts turn the spindle counter-clockwise (M4).
+    #[serde(default)]
+    pub invert: bool,
+    /// Acceleration of the speed ramp klar sends, rpm per second.
+    #[serde(default = "default_spindle_acceleration")]
+    pub acceleration: f64,
+    /// At-speed window as a fraction of the commanded speed.
+    #[serde(default = "default_at_speed_fraction")]
+    pub at_speed_fraction: f64,
+    /// Smallest at-speed window, rpm.
+    #[serde(default = "default_at_speed_min_rpm")]
+    pub at_speed_min_rpm: f64,
+    /// Receive PDO number used for controlword and target velocity (1..=4).
+    #[serde(default = "default_pdo_number")]
+    pub rpdo: u16,
+    /// Transmit PDO number used for statusword and actual velocity (1..=4).
+    #[serde(default = "default_pdo_number")]
+    pub tpdo: u16,
+}
+
+/// Homing parameters of one drive.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HomingConfig {
+    /// CiA 402 homing method (e.g. 35/37: current position; 17/18: limit switch;
+    /// 19–30: home switch; 1–14: with index pulse).
+    pub method: i8,
+    /// Speed while searching the switch, mm/s or degrees/s.
+    #[serde(default = "default_search_speed")]
+    pub speed_search: f64,
+    /// Speed while searching zero (index pulse), mm/s or degrees/s.
+    #[serde(default = "default_zero_speed")]
+    pub speed_zero: f64,
+    /// Homing acceleration, mm/s² or degrees/s².
+    #[serde(default = "default_homing_acceleration")]
+    pub acceleration: f64,
+    /// Position the home point gets, mm or degrees.
+    #[serde(default)]
+    pub offset: f64,
+}
+
+fn default_sdo_timeout_ms() -> u64 {
+    200
+}
+fn default_boot_timeout_ms() -> u64 {
+    3000
+}
+fn default_heartbeat_ms() -> u16 {
+    100
+}
+fn default_max_missed() -> u32 {
+    3
+}
+fn default_state_timeout_ms() -> u64 {
+    1000
+}
+fn default_serial_baud() -> u32 {
+    115_200
+}
+fn default_bitrate() -> u32 {
+    1_000_000
+}
+fn default_pdo_number() -> u16 {
+    1
+}
+fn default_spindle_acceleration() -> f64 {
+    2000.0
+}
+fn default_at_speed_fraction() -> f64 {
+    0.02
+}
+fn default_at_speed_min_rpm() -> f64 {
+    5.0
+}
+fn default_search_speed() -> f64 {
+    10.0
+}
+fn default_zero_speed() -> f64 {
+    1.0
+}
+fn default_homing_acceleration() -> f64 {
+    100.0
+}

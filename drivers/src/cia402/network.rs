@@ -1,0 +1,524 @@
+//! The CANopen network of CiA 402 drives behind [`super::Cia402Backend`] (axes) and
+//! [`super::Cia402Spindle`] (a spindle): the PDO layouts, the cyclic exchange, and the
+//! fault handling shared by both (start-up is in `setup`).
+//!
+//! Each servo cycle: send every drive's receive PDO (controlword,
+//! target position), send SYNC, collect every drive's transmit PDO (statusword, actual
+//! position). The mode of operation changes rarely (CSP ↔ homing) and goes by SDO, which
+//! keeps both PDOs at 6 bytes: three drives fit a 1 ms period at 1 Mbit/s. A spindle drive
+//! runs in cyclic synchronous velocity mode with target velocity and actual velocity in
+//! place of the positions. A drive's fault, an emergency, heartbeat loss, missing or
+//! malformed PDOs or bus-off stop every drive: drives still enabled get a quick stop, and
+//! the stop report names the node and the cause.
+
+use std::time::{Duration, Instant};
+
+use klar_motion::{AxisFault, BackendError};
+
+use super::objects::*;
+use super::scaling::Scaling;
+use super::state::*;
+use crate::can::{BusErrorKind, CanError, CanFrame};
+use crate::canopen::busload::{BusLoadError, CyclicTraffic};
+use crate::canopen::pdo::{self, PdoEntry};
+use crate::canopen::{CanOpenError, Emergency, Master, NodeEvent};
+
+/// The receive PDO layout klar maps for an axis: controlword, target position.
+pub const RPDO_ENTRIES: [PdoEntry; 2] = [
+    PdoEntry::new(CONTROLWORD, 0, 16),
+    PdoEntry::new(TARGET_POSITION, 0, 32),
+];
+/// The transmit PDO layout klar maps for an axis: statusword, actual position.
+pub const TPDO_ENTRIES: [PdoEntry; 2] = [
+    PdoEntry::new(STATUSWORD, 0, 16),
+    PdoEntry::new(POSITION_ACTUAL, 0, 32),
+];
+/// The receive PDO layout klar maps for a spindle: controlword, target velocity.
+pub const SPINDLE_RPDO_ENTRIES: [PdoEntry; 2] = [
+    PdoEntry::new(CONTROLWORD, 0, 16),
+    PdoEntry::new(TARGET_VELOCITY, 0, 32),
+];
+/// The transmit PDO layout klar maps for a spindle: statusword, actual velocity.
+pub const SPINDLE_TPDO_ENTRIES: [PdoEntry; 2] = [
+    PdoEntry::new(STATUSWORD, 0, 16),
+    PdoEntry::new(VELOCITY_ACTUAL, 0, 32),
+];
+
+/// Errors of the CiA 402 backend's set-up.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Cia402Error {
+    /// The configuration cannot work.
+    #[error("CANopen configuration: {0}")]
+    Config(String),
+    /// The cyclic traffic does not fit the bus.
+    #[error(transparent)]
+    BusLoad(#[from] BusLoadError),
+    /// A CANopen exchange failed.
+    #[error(transparent)]
+    CanOpen(#[from] CanOpenError),
+    /// The bus adapter failed.
+    #[error(transparent)]
+    Bus(#[from] CanError),
+}
+
+/// The cyclic traffic of `drives` drives (axes and spindle) with klar's PDO layout: SYNC
+/// plus one receive and one transmit PDO each (spindle PDOs have the same length).
+pub fn cyclic_traffic(drives: usize) -> CyclicTraffic {
+    let rx: usize = RPDO_ENTRIES.iter().map(|e| e.bytes()).sum();
+    let tx: usize = TPDO_ENTRIES.iter().map(|e| e.bytes()).sum();
+    let mut frame_lengths = vec![0];
+    for _ in 0..drives {
+        frame_lengths.push(rx);
+        frame_lengths.push(tx);
+    }
+    CyclicTraffic { frame_lengths }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Homing {
+    Idle,
+    /// Homing mode is active; the start bit is low for one cycle.
+    Arming,
+    /// Start bit set; waiting for "homing attained".
+    Running {
+        answers: u32,
+    },
+}
+
+/// What a drive serves.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum DriveKind {
+    /// A machine axis in CSP: target and actual are positions (counts).
+    Axis,
+    /// The spindle in CSV: target and actual are velocities (counts/s); its scaling is
+    /// counts per second per rpm.
+    Spindle,
+}
+
+/// One drive's state as the master sees it.
+#[derive(Debug, Clone)]
+pub(crate) struct Drive {
+    pub(crate) kind: DriveKind,
+    pub(crate) node: u8,
+    /// The main mode of operation (CSP or profile position for axes, CSV for a spindle).
+    pub(crate) mode: i8,
+    pub(crate) scaling: Scaling,
+    pub(crate) rpdo_cob: u16,
+    pub(crate) tpdo_cob: u16,
+    pub(crate) controlword: u16,
+    pub(crate) target: i32,
+    pub(crate) actual: i32,
+    pub(crate) status: u16,
+    pub(crate) seen: bool,
+    pub(crate) missed: u32,
+    pub(crate) commanded: f64,
+    pub(crate) velocity: f64,
+    pub(crate) homed: bool,
+    pub(crate) homing: Homing,
+    pub(crate) has_homing: bool,
+    pub(crate) fault: Option<AxisFault>,
+    /// True when `fault` only reports that another drive's fault stopped this one.
+    pub(crate) secondary: bool,
+    pub(crate) last_emcy: Option<Emergency>,
+}
+
+impl Drive {
+    pub(crate) fn power(&self) -> PowerState {
+        PowerState::from_statusword(self.status)
+    }
+}
+
+/// The drives on one CANopen bus: the axes first (in axis order), then the spindle.
+pub(crate) struct Network {
+    pub(crate) master: Master,
+    pub(crate) drives: Vec<Drive>,
+    pub(crate) axes: usize,
+    pub(crate) pdo_wait: Duration,
+    pub(crate) max_missed: u32,
+    pub(crate) state_timeout: Duration,
+    pub(crate) heartbeat_timeout: Option<f64>,
+    pub(crate) stop: Option<String>,
+    /// The spindle's at-speed window: fraction of the command, and minimum in rpm.
+    pub(crate) spindle_at_speed: (f64, f64),
+    /// The spindle's speed ramp per servo cycle, rpm.
+    pub(crate) spindle_ramp_step: f64,
+}
+
+impl Network {
+    /// Stops all axes because of `cause` at drive `index`: that axis gets `fault`, the
+    /// others a drive fault naming the cause, and enabled drives a quick stop.
+    pub(crate) fn stop_all(&mut self, index: Option<usize>, fault: AxisFault, cause: String) {
+        if self.stop.is_none() {
+            tracing::error!("{cause}; quick stop of all CANopen axes");
+            self.stop = Some(cause.clone());
+        }
+        for (i, d) in self.drives.iter_mut().enumerate() {
+            if index.is_none_or(|k| k == i) {
+                if d.fault.is_none() || d.secondary || index.is_some() {
+                    d.fault = Some(fault.clone());
+                    d.secondary = false;
+                }
+            } else if d.fault.is_none() {
+                d.fault = Some(AxisFault::Drive {
+                    code: 0,
+                    text: format!("stopped: {cause}"),
+                });
+                d.secondary = true;
+            }
+            d.homing = Homing::Idle;
+            if d.kind == DriveKind::Spindle {
+                // After a stop the spindle waits for a new command.
+                d.commanded = 0.0;
+                d.velocity = 0.0;
+            }
+        }
+    }
+
+    fn drive_index(&self, node: u8) -> Option<usize> {
+        self.drives.iter().position(|d| d.node == node)
+    }
+
+    /// Sorts the master's queued node events into faults.
+    pub(crate) fn handle_events(&mut self) {
+        while let Some(ev) = self.master.next_event() {
+            match ev {
+                NodeEvent::Emergency(e) => {
+                    let Some(i) = self.drive_index(e.node) else {
+                        tracing::warn!("{e} (not a configured drive)");
+                        continue;
+                    };
+                    if e.is_reset() {
+                        continue;
+                    }
+                    let fault = AxisFault::Drive {
+                        code: u32::from(e.code),
+                        text: e.to_string(),
+                    };
+                    let cause = e.to_string();
+                    if let Some(d) = self.drives.get_mut(i) {
+                        d.last_emcy = Some(e);
+                    }
+                    self.stop_all(Some(i), fault, cause);
+                }
+                NodeEvent::HeartbeatLost { node, silent_for } => {
+                    if let Some(i) = self.drive_index(node) {
+                        let cause =
+                            format!("node {node}: heartbeat lost (silent for {silent_for:.3} s)");
+                        self.stop_all(Some(i), AxisFault::CommunicationLost, cause);
+                    }
+                }
+                NodeEvent::Malformed { node, what } => {
+                    let cause = match node {
+                        Some(n) => format!("node {n}: malformed frame: {what}"),
+                        None => format!("malformed frame: {what}"),
+                    };
+                    match node.and_then(|n| self.drive_index(n)) {
+                        Some(i) => self.stop_all(Some(i), AxisFault::CommunicationLost, cause),
+                        None => tracing::warn!("{cause}"),
+                    }
+                }
+                NodeEvent::Bus(BusErrorKind::BusOff) => {
+                    self.stop_all(None, AxisFault::CommunicationLost, "CAN bus-off".into());
+                }
+                NodeEvent::Bus(kind) => tracing::warn!(%kind, "CAN bus error"),
+                NodeEvent::BootUp(node) => {
+                    if let Some(i) = self.drive_index(node) {
+                        let cause = format!("node {node}: unexpected boot-up (drive reset)");
+                        self.stop_all(Some(i), AxisFault::CommunicationLost, cause);
+                    }
+                }
+                NodeEvent::StateChanged(node, state) => {
+                    tracing::info!(node, ?state, "NMT state");
+                }
+            }
+        }
+    }
+
+    /// Sends every receive PDO and SYNC, then collects the transmit PDOs.
+    pub(crate) fn exchange(&mut self) {
+        for i in 0..self.drives.len() {
+            let Some(d) = self.drives.get(i) else {
+                continue;
+            };
+            let data = pdo::pack(&RPDO_ENTRIES, &[u32::from(d.controlword), d.target as u32]);
+            let frame = CanFrame::fixed(d.rpdo_cob, &data);
+            if let Err(e) = self.master.bus_send(&frame) {
+                let node = d.node;
+                self.stop_all(
+                    None,
+                    AxisFault::CommunicationLost,
+                    format!("node {node}: send failed: {e}"),
+                );
+                return;
+            }
+        }
+        if let Err(e) = self.master.sync() {
+            self.stop_all(
+                None,
+                AxisFault::CommunicationLost,
+                format!("SYNC not sent: {e}"),
+            );
+            return;
+        }
+        let cobs: Vec<u16> = self.drives.iter().map(|d| d.tpdo_cob).collect();
+        if let Err(e) = self.master.await_pdos(&cobs, self.pdo_wait) {
+            self.stop_all(
+                None,
+                AxisFault::CommunicationLost,
+                format!("CAN receive failed: {e}"),
+            );
+            return;
+        }
+        let sync = self.master.sync_count();
+        for i in 0..self.drives.len() {
+            let Some(d) = self.drives.get(i) else {
+                continue;
+            };
+            let fresh = self
+                .master
+                .pdo(d.tpdo_cob)
+                .filter(|s| s.sync_count >= sync)
+                .map(|s| s.frame);
+            let node = d.node;
+            match fresh {
+                None => {
+                    let missed = d.missed + 1;
+                    if let Some(d) = self.drives.get_mut(i) {
+                        d.missed = missed;
+                    }
+                    tracing::debug!(node, missed, "transmit PDO missing");
+                    if missed >= self.max_missed {
+                        let cause =
+                            format!("node {node}: no transmit PDO for {missed} SYNC cycles");
+                        self.stop_all(Some(i), AxisFault::CommunicationLost, cause);
+                    }
+                }
+                Some(frame) => match pdo::unpack(&TPDO_ENTRIES, frame.data()) {
+                    Some(v) => {
+                        if let (Some(d), [status, actual]) = (self.drives.get_mut(i), v.as_slice())
+                        {
+                            d.status = *status as u16;
+                            d.actual = *actual as i32;
+                            d.seen = true;
+                            d.missed = 0;
+                        }
+                    }
+                    None => {
+                        let cause = format!(
+                            "node {node}: transmit PDO with {} bytes, mapping needs {}",
+                            frame.data().len(),
+                            TPDO_ENTRIES.iter().map(|e| e.bytes()).sum::<usize>()
+                        );
+                        self.stop_all(Some(i), AxisFault::CommunicationLost, cause);
+                    }
+                },
+            }
+        }
+    }
+
+    /// Turns statusword bits into faults and follows homing.
+    pub(crate) fn evaluate(&mut self) {
+        let mut finished_homing = Vec::new();
+        for i in 0..self.drives.len() {
+            let Some(d) = self.drives.get_mut(i) else {
+                continue;
+            };
+            let power = d.power();
+            let node = d.node;
+            let mut raised: Option<(AxisFault, String)> = None;
+            if power.is_fault() && d.fault.is_none() {
+                let (code, text) = match &d.last_emcy {
+                    Some(e) => (u32::from(e.code), e.to_string()),
+                    None => (
+                        0,
+                        format!("node {node}: drive fault (no emergency message)"),
+                    ),
+                };
+                raised = Some((
+                    AxisFault::Drive {
+                        code,
+                        text: text.clone(),
+                    },
+                    text,
+                ));
+            } else if power == PowerState::OperationEnabled
+                && d.fault.is_none()
+                && d.kind == DriveKind::Axis
+            {
+                match d.homing {
+                    Homing::Idle if d.status & SW_OMS2 != 0 => {
+                        let fe = d.commanded - d.scaling.to_units(d.actual);
+                        raised = Some((
+                            AxisFault::FollowingError(fe),
+                            format!("node {node}: following error {fe:.4} reported by the drive"),
+                        ));
+                    }
+                    Homing::Idle if d.status & SW_INTERNAL_LIMIT != 0 => {
+                        raised = Some((
+                            AxisFault::LimitSwitch {
+                                positive: d.velocity >= 0.0,
+                            },
+                            format!("node {node}: internal limit active"),
+                        ));
+                    }
+                    Homing::Arming => {
+                        d.controlword = CW_ENABLE_OPERATION | CW_HOMING_START;
+                        d.homing = Homing::Running { answers: 0 };
+                    }
+                    Homing::Running { answers } => {
+                        if d.status & SW_OMS2 != 0 {
+                            raised = Some((
+                                AxisFault::Drive {
+                                    code: 0,
+                                    text: format!("node {node}: homing error"),
+                                },
+                                format!("node {node}: homing error"),
+                            ));
+                        } else if answers > 0
+                            && d.status & SW_OMS1 != 0
+                            && d.status & SW_TARGET_REACHED != 0
+                        {
+                            d.homing = Homing::Idle;
+                            d.homed = true;
+                            d.controlword = CW_ENABLE_OPERATION;
+                            d.target = d.actual;
+                            d.commanded = d.scaling.to_units(d.actual);
+                            tracing::info!(node, position = d.commanded, "homed");
+                            finished_homing.push(i);
+                        } else {
+                            d.homing = Homing::Running {
+                                answers: answers + 1,
+                            };
+                        }
+                    }
+                    _ => {}
+                }
+            } else if power != PowerState::OperationEnabled
+                && d.kind == DriveKind::Axis
+                && self.stop.is_none()
+                && is_enable_operation(d.controlword)
+                && d.fault.is_none()
+            {
+                raised = Some((
+                    AxisFault::Drive {
+                        code: 0,
+                        text: format!("node {node}: left operation enabled ({power:?})"),
+                    },
+                    format!("node {node}: left operation enabled ({power:?})"),
+                ));
+            }
+            if let Some((fault, cause)) = raised {
+                self.stop_all(Some(i), fault, cause);
+            }
+        }
+        for i in finished_homing {
+            let Some((node, mode)) = self.drives.get(i).map(|d| (d.node, d.mode)) else {
+                continue;
+            };
+            if let Err(e) = self.set_mode(node, mode) {
+                let cause = format!("node {node}: back to mode {mode} after homing: {e}");
+                self.stop_all(
+                    Some(i),
+                    AxisFault::Drive {
+                        code: 0,
+                        text: cause.clone(),
+                    },
+                    cause,
+                );
+            }
+        }
+    }
+
+    /// Sets the mode of operation over SDO and waits until the drive shows it.
+    pub(crate) fn set_mode(&mut self, node: u8, mode: i8) -> Result<(), CanOpenError> {
+        self.master
+            .sdo_write(node, MODES_OF_OPERATION, 0, &[mode as u8])?;
+        let deadline = Instant::now() + self.state_timeout;
+        loop {
+            let shown = self.master.sdo_read(node, MODES_DISPLAY, 0)?;
+            if shown.first().map(|&b| b as i8) == Some(mode) {
+                return Ok(());
+            }
+            if Instant::now() >= deadline {
+                return Err(CanOpenError::SdoProtocol {
+                    node,
+                    index: MODES_DISPLAY,
+                    sub: 0,
+                    what: format!("mode {mode} not shown within the state timeout"),
+                });
+            }
+        }
+    }
+
+    /// Sets the next controlword of every drive while stopped: quick stop for enabled
+    /// drives, hold otherwise.
+    pub(crate) fn apply_stop(&mut self) {
+        if self.stop.is_none() {
+            return;
+        }
+        for d in self.drives.iter_mut() {
+            match d.kind {
+                DriveKind::Axis => {
+                    d.target = d.actual;
+                    d.commanded = d.scaling.to_units(d.actual);
+                }
+                DriveKind::Spindle => d.target = 0,
+            }
+            match d.power() {
+                PowerState::OperationEnabled | PowerState::QuickStopActive => {
+                    d.controlword = CW_QUICK_STOP
+                }
+                _ => d.controlword = CW_DISABLE_VOLTAGE,
+            }
+        }
+    }
+
+    /// Runs exchanges until `done` holds for the selected drives (`which`: one drive by
+    /// index, or `None` for all axes), setting their controlwords with `next`, or until the
+    /// state timeout passes.
+    pub(crate) fn drive_sequence(
+        &mut self,
+        which: Option<usize>,
+        mut next: impl FnMut(&Drive) -> Option<u16>,
+        done: impl Fn(&Drive) -> bool,
+    ) -> Result<(), BackendError> {
+        let deadline = Instant::now() + self.state_timeout;
+        loop {
+            self.handle_events();
+            let axes = self.axes;
+            let selected = |i: usize| which.map_or(i < axes, |w| w == i);
+            let all_done = self
+                .drives
+                .iter()
+                .enumerate()
+                .all(|(i, d)| !selected(i) || done(d));
+            if all_done {
+                return Ok(());
+            }
+            if Instant::now() >= deadline {
+                let stuck: Vec<String> = self
+                    .drives
+                    .iter()
+                    .enumerate()
+                    .filter(|(i, d)| selected(*i) && !done(d))
+                    .map(|(_, d)| format!("node {} in {:?}", d.node, d.power()))
+                    .collect();
+                return Err(BackendError::InvalidState(format!(
+                    "state change timed out: {}",
+                    stuck.join(", ")
+                )));
+            }
+            for (i, d) in self.drives.iter_mut().enumerate() {
+                if selected(i)
+                    && let Some(cw) = next(d)
+                {
+                    d.controlword = cw;
+                }
+                if d.kind == DriveKind::Axis {
+                    d.target = d.actual;
+                }
+            }
+            self.exchange();
+        }
+    }
+}

@@ -1,0 +1,69 @@
+//! CiA 402 object dictionary indices and the mode-of-operation codes klar uses.
+
+/// Controlword (u16).
+pub const CONTROLWORD: u16 = 0x6040;
+/// Statusword (u16).
+pub const STATUSWORD: u16 = 0x6041;
+/// Quick stop option code (i16).
+pub const QUICK_STOP_OPTION: u16 = 0x605A;
+/// Modes of operation (i8).
+pub const MODES_OF_OPERATION: u16 = 0x6060;
+/// Modes of operation display (i8).
+pub const MODES_DISPLAY: u16 = 0x6061;
+/// Position actual value (i32, counts).
+pub const POSITION_ACTUAL: u16 = 0x6064;
+/// Following error window (u32, counts).
+pub const FOLLOWING_ERROR_WINDOW: u16 = 0x6065;
+/// Velocity actual value (i32, counts/s).
+pub const VELOCITY_ACTUAL: u16 = 0x606C;
+/// Target position (i32, counts).
+pub const TARGET_POSITION: u16 = 0x607A;
+/// Home offset (i32, counts).
+pub const HOME_OFFSET: u16 = 0x607C;
+/// Profile velocity (u32, counts/s) for profile position mode.
+pub const PROFILE_VELOCITY: u16 = 0x6081;
+/// Profile acceleration (u32, counts/s²).
+pub const PROFILE_ACCELERATION: u16 = 0x6083;
+/// Profile deceleration (u32, counts/s²).
+pub const PROFILE_DECELERATION: u16 = 0x6084;
+/// Quick stop deceleration (u32, counts/s²).
+pub const QUICK_STOP_DECELERATION: u16 = 0x6085;
+/// Homing method (i8).
+pub const HOMING_METHOD: u16 = 0x6098;
+/// Homing speeds (u32, counts/s): sub 1 search for switch, sub 2 search for zero.
+pub const HOMING_SPEEDS: u16 = 0x6099;
+/// Homing acceleration (u32, counts/s²).
+pub const HOMING_ACCELERATION: u16 = 0x609A;
+/// Interpolation time period: sub 1 value (u8), sub 2 index (i8, power of ten of seconds).
+pub const INTERPOLATION_PERIOD: u16 = 0x60C2;
+/// Following error actual value (i32, counts).
+pub const FOLLOWING_ERROR_ACTUAL: u16 = 0x60F4;
+/// Target velocity (i32, counts/s) for CSV and profile velocity.
+pub const TARGET_VELOCITY: u16 = 0x60FF;
+/// Error code (u16): the last error, as in EMCY.
+pub const ERROR_CODE: u16 = 0x603F;
+/// Producer heartbeat time (u16, ms), CiA 301.
+pub const PRODUCER_HEARTBEAT: u16 = 0x1017;
+
+/// Mode of operation: profile position.
+pub const MODE_PROFILE_POSITION: i8 = 1;
+/// Mode of operation: homing.
+pub const MODE_HOMING: i8 = 6;
+/// Mode of operation: cyclic synchronous position.
+pub const MODE_CSP: i8 = 8;
+/// Mode of operation: cyclic synchronous velocity.
+pub const MODE_CSV: i8 = 9;
+
+/// The interpolation period as (value, index) with value·10^index seconds = `period`,
+/// choosing the largest index (coarsest unit, from 0.1 s down to 1 µs) that represents it
+/// exactly in a u8; `None` if no such pair exists.
+pub fn interpolation_period(period: f64) -> Option<(u8, i8)> {
+    for index in [-1i8, -2, -3, -4, -5, -6] {
+        let value = period / 10f64.powi(i32::from(index));
+        let rounded = value.round();
+        if (value - rounded).abs() < 1e-6 && (1.0..=255.0).contains(&rounded) {
+            return Some((rounded as u8, index));
+        }
+    }
+    None
+}

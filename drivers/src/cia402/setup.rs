@@ -1,0 +1,374 @@
+//! Start-up of the CANopen network: opening the bus, the bus-load check, boot-up, drive
+//! parameters and PDO mappings over SDO, NMT start, and the first exchange.
+
+use std::time::Duration;
+
+use super::config::{AxisMode, BusConfig, CanOpenConfig, DriveConfig, SpindleConfig};
+use super::network::*;
+use super::objects::*;
+use super::scaling::Scaling;
+use super::state::*;
+use crate::can::CanBus;
+use crate::canopen::busload;
+use crate::canopen::pdo::{self, PdoConfig, PdoKind, TRANSMIT_EVERY_SYNC};
+use crate::canopen::sdo::{ABORT_NO_OBJECT, ABORT_NO_SUBINDEX};
+use crate::canopen::{CanOpenError, Master, NmtCommand, NodeEvent};
+
+/// Communication cycle period (u32, µs), CiA 301.
+const COMM_CYCLE_PERIOD: u16 = 0x1006;
+
+/// Opens the bus the configuration names (SocketCAN or slcan). A simulated bus is built
+/// by `klar_sim::cia402` instead.
+pub(crate) fn open_bus(config: &CanOpenConfig) -> Result<Box<dyn CanBus>, Cia402Error> {
+    {
+        let bus: Box<dyn CanBus> = match &config.bus {
+            BusConfig::Socketcan { interface, .. } => {
+                Box::new(crate::can::socketcan::SocketCanBus::open(interface)?)
+            }
+            BusConfig::Slcan {
+                port,
+                bitrate,
+                serial_baud,
+            } => {
+                let mut options = crate::can::slcan::SlcanOptions::host(*bitrate);
+                options.serial_baud = *serial_baud;
+                Box::new(crate::can::slcan::SlcanBus::open(port, options)?)
+            }
+            BusConfig::Sim { .. } => {
+                return Err(Cia402Error::Config(
+                    "a simulated bus is built by klar_sim::cia402::simulated_backend".into(),
+                ));
+            }
+        };
+        Ok(bus)
+    }
+}
+
+impl Network {
+    /// Starts the drives of `config` on `bus` with SYNC every `servo_period` seconds.
+    pub(crate) fn start(
+        config: &CanOpenConfig,
+        servo_period: f64,
+        bus: Box<dyn CanBus>,
+    ) -> Result<Self, Cia402Error> {
+        if !(servo_period.is_finite() && servo_period > 0.0) {
+            return Err(Cia402Error::Config(format!(
+                "servo period {servo_period} s"
+            )));
+        }
+        if config.drives.is_empty() && config.spindle.is_none() {
+            return Err(Cia402Error::Config("no drives".into()));
+        }
+        let load = busload::check(
+            &cyclic_traffic(config.drives.len() + usize::from(config.spindle.is_some())),
+            config.bus.bitrate(),
+            servo_period,
+        )?;
+        tracing::info!(
+            load_percent = load * 100.0,
+            "CAN bus load of cyclic traffic"
+        );
+        let mut drives = Vec::with_capacity(config.drives.len() + 1);
+        for d in &config.drives {
+            drives.push(new_drive(d)?);
+        }
+        if let Some(s) = &config.spindle {
+            drives.push(new_spindle(s)?);
+        }
+        let mut nodes: Vec<u8> = drives.iter().map(|d| d.node).collect();
+        nodes.sort_unstable();
+        if nodes.windows(2).any(|w| w[0] == w[1]) {
+            return Err(Cia402Error::Config(format!("node IDs repeat: {nodes:?}")));
+        }
+        let mut master = Master::new(bus, Duration::from_millis(config.sdo_timeout_ms));
+        master.reset_and_wait_boot(&nodes, Duration::from_millis(config.boot_timeout_ms))?;
+        for (d, cfg) in drives.iter().zip(&config.drives) {
+            configure_drive(&mut master, d, Some(cfg), config, servo_period)?;
+        }
+        if let Some(s) = drives.get(config.drives.len()) {
+            configure_drive(&mut master, s, None, config, servo_period)?;
+        }
+        for d in &drives {
+            master.nmt(NmtCommand::Start, d.node)?;
+        }
+        // Boot-ups up to here belong to the start-up; later ones mean a drive reset.
+        let mut kept = Vec::new();
+        while let Some(ev) = master.next_event() {
+            if !matches!(ev, NodeEvent::BootUp(_)) {
+                kept.push(ev);
+            }
+        }
+        master.requeue(kept);
+        let heartbeat_timeout = (config.heartbeat_ms > 0).then(|| {
+            config
+                .heartbeat_timeout_ms
+                .map_or(3.0 * f64::from(config.heartbeat_ms) / 1000.0, |ms| {
+                    ms as f64 / 1000.0
+                })
+        });
+        if let Some(timeout) = heartbeat_timeout {
+            for d in &drives {
+                master.watch_heartbeat(d.node, timeout);
+            }
+        }
+        let pdo_wait = config.pdo_wait_ms.map_or(servo_period, |ms| ms / 1000.0);
+        let mut backend = Self {
+            master,
+            drives,
+            axes: config.drives.len(),
+            spindle_at_speed: config
+                .spindle
+                .as_ref()
+                .map_or((0.02, 5.0), |s| (s.at_speed_fraction, s.at_speed_min_rpm)),
+            spindle_ramp_step: config
+                .spindle
+                .as_ref()
+                .map_or(f64::INFINITY, |s| s.acceleration.abs() * servo_period),
+            pdo_wait: Duration::from_secs_f64(pdo_wait.clamp(0.0, 10.0)),
+            max_missed: config.max_missed_pdos.max(1),
+            state_timeout: Duration::from_millis(config.state_timeout_ms),
+            heartbeat_timeout,
+            stop: None,
+        };
+        // A first exchange reads every drive's state and position.
+        backend.exchange();
+        backend.handle_events();
+        if let Some(d) = backend.drives.iter().find(|d| !d.seen) {
+            return Err(Cia402Error::Config(format!(
+                "node {}: no transmit PDO after the first SYNC",
+                d.node
+            )));
+        }
+        for d in backend.drives.iter_mut() {
+            match d.kind {
+                DriveKind::Axis => {
+                    d.target = d.actual;
+                    d.commanded = d.scaling.to_units(d.actual);
+                }
+                DriveKind::Spindle => {
+                    d.target = 0;
+                    d.commanded = 0.0;
+                }
+            }
+        }
+        Ok(backend)
+    }
+}
+
+fn new_drive(cfg: &DriveConfig) -> Result<Drive, Cia402Error> {
+    let scaling = Scaling::new(cfg.counts_per_unit, cfg.invert)
+        .map_err(|e| Cia402Error::Config(format!("node {}: {e}", cfg.node)))?;
+    let mode = match cfg.mode {
+        AxisMode::Csp => MODE_CSP,
+        AxisMode::Pp => MODE_PROFILE_POSITION,
+    };
+    make_drive(
+        DriveKind::Axis,
+        mode,
+        cfg.node,
+        scaling,
+        cfg.rpdo,
+        cfg.tpdo,
+        cfg.homing.is_some(),
+    )
+}
+
+fn new_spindle(cfg: &SpindleConfig) -> Result<Drive, Cia402Error> {
+    // Target and actual velocity are counts per second: counts per revolution / 60 per rpm.
+    let scaling = Scaling::new(cfg.counts_per_rev / 60.0, cfg.invert)
+        .map_err(|e| Cia402Error::Config(format!("spindle node {}: {e}", cfg.node)))?;
+    make_drive(
+        DriveKind::Spindle,
+        MODE_CSV,
+        cfg.node,
+        scaling,
+        cfg.rpdo,
+        cfg.tpdo,
+        false,
+    )
+}
+
+fn make_drive(
+    kind: DriveKind,
+    mode: i8,
+    node: u8,
+    scaling: Scaling,
+    rpdo: u16,
+    tpdo: u16,
+    has_homing: bool,
+) -> Result<Drive, Cia402Error> {
+    if node == 0 || node > 127 {
+        return Err(Cia402Error::Config(format!(
+            "node ID {node} outside 1..=127"
+        )));
+    }
+    let rpdo_cob = pdo::default_cob_id(PdoKind::Receive, rpdo, node).ok_or_else(|| {
+        Cia402Error::Config(format!("node {node}: receive PDO {rpdo} not in 1..=4"))
+    })?;
+    let tpdo_cob = pdo::default_cob_id(PdoKind::Transmit, tpdo, node).ok_or_else(|| {
+        Cia402Error::Config(format!("node {node}: transmit PDO {tpdo} not in 1..=4"))
+    })?;
+    Ok(Drive {
+        kind,
+        mode,
+        node,
+        scaling,
+        rpdo_cob,
+        tpdo_cob,
+        controlword: CW_DISABLE_VOLTAGE,
+        target: 0,
+        actual: 0,
+        status: 0,
+        seen: false,
+        missed: 0,
+        commanded: 0.0,
+        velocity: 0.0,
+        homed: false,
+        homing: Homing::Idle,
+        has_homing,
+        fault: None,
+        secondary: false,
+        last_emcy: None,
+    })
+}
+
+/// Writes an object that a drive may lack; "no such object" aborts are only logged.
+fn write_optional(
+    master: &mut Master,
+    node: u8,
+    index: u16,
+    sub: u8,
+    data: &[u8],
+) -> Result<(), CanOpenError> {
+    match master.sdo_write(node, index, sub, data) {
+        Err(CanOpenError::SdoAbort { code, .. })
+            if code == ABORT_NO_OBJECT || code == ABORT_NO_SUBINDEX =>
+        {
+            tracing::debug!(node, index, sub, "optional object missing");
+            Ok(())
+        }
+        other => other,
+    }
+}
+
+/// Writes a drive's parameters and PDOs; `cfg` is the axis configuration (`None` for the
+/// spindle, whose PDO numbers come from the spindle configuration).
+fn configure_drive(
+    master: &mut Master,
+    d: &Drive,
+    cfg: Option<&DriveConfig>,
+    bus: &CanOpenConfig,
+    period: f64,
+) -> Result<(), Cia402Error> {
+    let node = d.node;
+    let (rpdo, tpdo, mode, rx_entries, tx_entries) = match (d.kind, cfg, &bus.spindle) {
+        (DriveKind::Axis, Some(c), _) => (c.rpdo, c.tpdo, d.mode, RPDO_ENTRIES, TPDO_ENTRIES),
+        (DriveKind::Spindle, _, Some(s)) => (
+            s.rpdo,
+            s.tpdo,
+            MODE_CSV,
+            SPINDLE_RPDO_ENTRIES,
+            SPINDLE_TPDO_ENTRIES,
+        ),
+        _ => {
+            return Err(Cia402Error::Config(format!(
+                "node {node}: no configuration"
+            )));
+        }
+    };
+    master.sdo_write(node, PRODUCER_HEARTBEAT, 0, &bus.heartbeat_ms.to_le_bytes())?;
+    let micros = (period * 1e6).round() as u32;
+    write_optional(master, node, COMM_CYCLE_PERIOD, 0, &micros.to_le_bytes())?;
+    let (value, index) = interpolation_period(period).ok_or_else(|| {
+        Cia402Error::Config(format!(
+            "servo period {period} s cannot be given to a drive as 0x60C2"
+        ))
+    })?;
+    master.sdo_write(node, INTERPOLATION_PERIOD, 1, &[value])?;
+    master.sdo_write(node, INTERPOLATION_PERIOD, 2, &[index as u8])?;
+    master.sdo_write(node, MODES_OF_OPERATION, 0, &[mode as u8])?;
+    if let Some(w) = cfg.and_then(|c| c.following_error_window) {
+        master.sdo_write(
+            node,
+            FOLLOWING_ERROR_WINDOW,
+            0,
+            &d.scaling.magnitude_counts(w).to_le_bytes(),
+        )?;
+    }
+    if let Some(v) = cfg.and_then(|c| c.profile_velocity) {
+        master.sdo_write(
+            node,
+            PROFILE_VELOCITY,
+            0,
+            &d.scaling.magnitude_counts(v).to_le_bytes(),
+        )?;
+    }
+    if let Some(a) = cfg.and_then(|c| c.profile_acceleration) {
+        let counts = d.scaling.magnitude_counts(a).to_le_bytes();
+        master.sdo_write(node, PROFILE_ACCELERATION, 0, &counts)?;
+        master.sdo_write(node, PROFILE_DECELERATION, 0, &counts)?;
+    }
+    if let Some(h) = cfg.and_then(|c| c.homing.as_ref()) {
+        master.sdo_write(node, HOMING_METHOD, 0, &[h.method as u8])?;
+        master.sdo_write(
+            node,
+            HOMING_SPEEDS,
+            1,
+            &d.scaling.magnitude_counts(h.speed_search).to_le_bytes(),
+        )?;
+        master.sdo_write(
+            node,
+            HOMING_SPEEDS,
+            2,
+            &d.scaling.magnitude_counts(h.speed_zero).to_le_bytes(),
+        )?;
+        master.sdo_write(
+            node,
+            HOMING_ACCELERATION,
+            0,
+            &d.scaling.magnitude_counts(h.acceleration).to_le_bytes(),
+        )?;
+        let offset = d
+            .scaling
+            .to_counts(h.offset)
+            .map_err(|e| Cia402Error::Config(format!("node {node}: home offset: {e}")))?;
+        master.sdo_write(node, HOME_OFFSET, 0, &offset.to_le_bytes())?;
+    }
+    for n in 1..=4u16 {
+        for kind in [PdoKind::Receive, PdoKind::Transmit] {
+            let used = match kind {
+                PdoKind::Receive => rpdo,
+                PdoKind::Transmit => tpdo,
+            };
+            if n == used {
+                continue;
+            }
+            match master.disable_pdo(node, kind, n) {
+                Err(CanOpenError::SdoAbort { code, .. })
+                    if code == ABORT_NO_OBJECT || code == ABORT_NO_SUBINDEX => {}
+                other => other?,
+            }
+        }
+    }
+    master.configure_pdo(
+        node,
+        &PdoConfig {
+            kind: PdoKind::Receive,
+            number: rpdo,
+            cob_id: d.rpdo_cob,
+            transmission: TRANSMIT_EVERY_SYNC,
+            entries: rx_entries.to_vec(),
+        },
+    )?;
+    master.configure_pdo(
+        node,
+        &PdoConfig {
+            kind: PdoKind::Transmit,
+            number: tpdo,
+            cob_id: d.tpdo_cob,
+            transmission: TRANSMIT_EVERY_SYNC,
+            entries: tx_entries.to_vec(),
+        },
+    )?;
+    Ok(())
+}

@@ -1,0 +1,78 @@
+//! [`Cia402Spindle`]: a CiA 402 drive in cyclic synchronous velocity mode as the
+//! machine's [`klar_motion::SpindleBackend`], sharing the bus (and the SYNC cycle) with the
+//! axes of its [`super::Cia402Backend`].
+//!
+//! A non-zero command switches the drive on through the power state machine, one step per
+//! cycle, then sends the speed as target velocity; zero keeps it enabled at standstill.
+
+use std::sync::{Arc, Mutex};
+
+use klar_motion::{BackendError, SpindleBackend, SpindleFeedback};
+
+use super::backend::lock;
+use super::network::{DriveKind, Network};
+use super::state::PowerState;
+
+/// The spindle drive of a CANopen bus.
+pub struct Cia402Spindle {
+    net: Arc<Mutex<Network>>,
+}
+
+impl Cia402Spindle {
+    pub(crate) fn new(net: Arc<Mutex<Network>>) -> Self {
+        Self { net }
+    }
+
+    /// Clears the spindle drive's fault if its cause is gone.
+    pub fn reset_fault(&mut self) -> Result<(), BackendError> {
+        let mut net = lock(&self.net);
+        let index = spindle_index(&net)?;
+        net.reset_drive_fault(index)
+    }
+}
+
+fn spindle_index(net: &Network) -> Result<usize, BackendError> {
+    net.drives
+        .iter()
+        .position(|d| d.kind == DriveKind::Spindle)
+        .ok_or_else(|| BackendError::InvalidState("no spindle drive on this bus".into()))
+}
+
+impl SpindleBackend for Cia402Spindle {
+    fn command(&mut self, rpm: f64) -> Result<(), BackendError> {
+        if !rpm.is_finite() {
+            return Err(BackendError::InvalidState(format!(
+                "spindle speed {rpm} rpm"
+            )));
+        }
+        let mut net = lock(&self.net);
+        let index = spindle_index(&net)?;
+        if let Some(d) = net.drives.get_mut(index) {
+            d.commanded = rpm;
+        }
+        Ok(())
+    }
+
+    fn cycle(&mut self, t: f64) -> Result<SpindleFeedback, BackendError> {
+        let mut net = lock(&self.net);
+        if net.axes == 0 {
+            net.cycle(t, &[]);
+        }
+        let index = spindle_index(&net)?;
+        let at_speed_fraction = net.spindle_at_speed.0;
+        let at_speed_min = net.spindle_at_speed.1;
+        let d = net
+            .drives
+            .get(index)
+            .ok_or_else(|| BackendError::InvalidState("no spindle drive on this bus".into()))?;
+        let rpm = d.scaling.to_units(d.actual);
+        let window = (d.commanded.abs() * at_speed_fraction).max(at_speed_min);
+        Ok(SpindleFeedback {
+            rpm,
+            at_speed: d.fault.is_none()
+                && (d.commanded == 0.0 || d.power() == PowerState::OperationEnabled)
+                && (rpm - d.commanded).abs() <= window,
+            fault: d.fault.clone(),
+        })
+    }
+}

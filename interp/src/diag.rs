@@ -1,0 +1,167 @@
+//! Diagnostics: what the interpreter reports about a program, and the error kinds behind them.
+
+use std::fmt;
+use std::path::PathBuf;
+use thiserror::Error;
+
+/// One problem found in a program, located by file, line and column.
+///
+/// Displayed as `file:line:col: message`; when the block carries a block number the message
+/// starts with `block N: `.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Diagnostic {
+    /// The program file (as given to the interpreter, or the name passed to `from_source`).
+    pub file: PathBuf,
+    /// 1-based line.
+    pub line: u32,
+    /// 1-based column in characters.
+    pub col: u32,
+    /// The block number written in the program, if the block has one.
+    pub block: Option<u64>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for Diagnostic {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}:{}:{}: {}",
+            self.file.display(),
+            self.line,
+            self.col,
+            self.message
+        )
+    }
+}
+
+impl std::error::Error for Diagnostic {}
+
+impl Diagnostic {
+    /// Builds a diagnostic from an error kind, prefixing the block number when known.
+    pub(crate) fn new(
+        file: PathBuf,
+        line: u32,
+        col: u32,
+        block: Option<u64>,
+        error: &ProgramError,
+    ) -> Self {
+        let message = match block {
+            Some(n) => format!("block {n}: {error}"),
+            None => error.to_string(),
+        };
+        Diagnostic {
+            file,
+            line,
+            col,
+            block,
+            message,
+        }
+    }
+}
+
+/// Everything that can be wrong with a program or with reading it.
+#[derive(Debug, Clone, PartialEq, Error)]
+pub enum ProgramError {
+    /// The file could not be read.
+    #[error("cannot read program: {0}")]
+    Io(String),
+    /// The file is in a dialect this version cannot run.
+    #[error("dialect not supported yet: {0}")]
+    DialectNotSupported(&'static str),
+    /// The dialect could not be recognised from the name or the text.
+    #[error("cannot tell the program dialect (expected .h Klartext, .i TNC ISO or .nc lathe DIN)")]
+    UnknownDialect,
+    /// The first block is not `BEGIN PGM`.
+    #[error("missing BEGIN PGM: a Klartext program starts with `BEGIN PGM name MM|INCH`")]
+    MissingBegin,
+    /// The text ended without `END PGM`.
+    #[error("END PGM missing at end of file")]
+    MissingEnd,
+    /// A block follows `END PGM`.
+    #[error("block after END PGM")]
+    AfterEnd,
+    /// The block keyword is not Klartext.
+    #[error("unknown block type '{0}'")]
+    UnknownBlock(String),
+    /// A word that the block type does not know.
+    #[error("unknown word '{word}' in {block} block")]
+    UnknownWord {
+        /// The word as written.
+        word: String,
+        /// The block type.
+        block: &'static str,
+    },
+    /// A known word in a block type that does not take it.
+    #[error("word {word} is not allowed in {block} block")]
+    MisplacedWord {
+        /// The word.
+        word: String,
+        /// The block type.
+        block: &'static str,
+    },
+    /// A word appears twice in one block.
+    #[error("word {0} programmed twice in one block")]
+    DuplicateWord(String),
+    /// A word that needs a value has none.
+    #[error("missing value after {0}")]
+    MissingValue(String),
+    /// Something required by the block type is absent.
+    #[error("{0}")]
+    Missing(&'static str),
+    /// A token that does not fit where it stands.
+    #[error("unexpected {0}")]
+    Unexpected(String),
+    /// A template placeholder such as `{0:+d}` left in the text.
+    #[error("template placeholder '{0}' in program text (fill in the template first)")]
+    Placeholder(String),
+    /// A number or parameter index that is out of range.
+    #[error("{0}")]
+    OutOfRange(String),
+    /// A feature that will come later.
+    #[error("{0} not supported yet")]
+    NotSupported(String),
+    /// An M function that is not implemented.
+    #[error("M{0} not supported")]
+    UnsupportedM(u32),
+    /// A C block whose end point lies on a different radius about CC than its start.
+    #[error(
+        "C end point is {end:.4} mm from CC, start point {start:.4} mm: radii differ by more than {tol} mm"
+    )]
+    RadiusMismatch {
+        /// Start radius.
+        start: f64,
+        /// End radius.
+        end: f64,
+        /// Tolerance.
+        tol: f64,
+    },
+    /// A CR block whose chord does not fit the radius.
+    #[error("CR chord {chord:.3} mm longer than 2R = {two_r:.3} mm")]
+    ChordTooLong {
+        /// Distance from start to end point.
+        chord: f64,
+        /// Twice the programmed radius.
+        two_r: f64,
+    },
+    /// An arc that needs a pole before CC was programmed.
+    #[error("{0} without circle centre: program CC first")]
+    NoPole(&'static str),
+    /// CP with IPA whose sign is not the DR sign.
+    #[error("IPA{ipa:+} and DR{dr} have different signs")]
+    IpaSign {
+        /// The incremental angle.
+        ipa: f64,
+        /// `+` or `-`.
+        dr: char,
+    },
+    /// An arc block that describes no arc.
+    #[error("{0}")]
+    Geometry(String),
+    /// A motion at feed with no feed programmed.
+    #[error("no feed rate programmed: add F to this or an earlier block")]
+    NoFeed,
+    /// Arithmetic failure in a Q parameter computation.
+    #[error("{0}")]
+    Arithmetic(String),
+}

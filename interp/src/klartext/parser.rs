@@ -1,0 +1,818 @@
+//! Klartext parser: one block's text → a [`Block`] with its words resolved to typed fields.
+//!
+//! Parsing checks syntax only (which words a block type takes, that values are present); it
+//! does not look at Q parameter values or geometry, so a whole file can be checked without
+//! running it. Formulas are compiled into the parser's reused postfix buffer ([`Parser::code`]).
+//!
+//! Tolerated forms seen in real files: optional block number (also `N12`), `/` block skip
+//! before or after the number, spaces inside words, `R`/`F`/`M` without a value (old exports:
+//! `R` alone is R0, an empty `F` or `M` is ignored), `F MAX`, decimal commas, `* - text`
+//! headlines, `;` comments and `( … )` comment headers. Block types that belong to later
+//! milestones (cycles, labels, calls, APPR/DEP, RND, CHF, SPL, FK, …) are recognised by their
+//! keyword and reported as not supported when executed; their words are not checked yet.
+
+use super::lexer::{Lexer, TokKind, Token};
+use super::words::split_q;
+use crate::diag::ProgramError;
+use crate::klartext::expr::{MAX_PARAM, ParamKind, ParamRef, Rpn, Value};
+use crate::op::{AxisLetter, CompSide};
+
+/// A coordinate word (`X+10`, `IX-2`, `PA+Q3`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Coord {
+    /// The value as written (program units).
+    pub value: Value,
+    /// True for the `I` prefix.
+    pub incremental: bool,
+    /// Byte position of the word in the block text.
+    pub pos: u32,
+}
+
+/// How the feed is given in a block.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum FeedWord {
+    /// `FMAX` / `F MAX`: rapid for this block only.
+    Max,
+    /// `FAUTO`: the feed from TOOL CALL.
+    Auto,
+    /// `F…` in program units per minute.
+    Value(Value),
+}
+
+/// Most M words one block may carry.
+pub(crate) const MAX_M: usize = 8;
+
+/// The words of a path block (also used for CC, M-only, STOP and BLK FORM blocks).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Words {
+    /// Axis coordinates, indexed by [`AxisLetter::index`].
+    pub axes: [Option<Coord>; 9],
+    /// Polar radius `PR`/`IPR`.
+    pub pr: Option<Coord>,
+    /// Polar angle `PA`/`IPA`.
+    pub pa: Option<Coord>,
+    /// Direction of rotation: `Some(true)` for DR+, with the word position.
+    pub dr: Option<(bool, u32)>,
+    /// Radius of CR (`R±r`), with the word position.
+    pub radius: Option<(Value, u32)>,
+    /// Radius compensation word.
+    pub comp: Option<CompSide>,
+    /// Feed word.
+    pub feed: Option<FeedWord>,
+    /// M numbers in the order written.
+    pub m: [u32; MAX_M],
+    /// How many of `m` are used.
+    pub m_count: u8,
+    /// Byte position of each M word.
+    pub m_pos: [u32; MAX_M],
+}
+
+impl Words {
+    /// The M words programmed, with their positions.
+    pub fn m_words(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
+        let n = usize::from(self.m_count).min(MAX_M);
+        self.m[..n]
+            .iter()
+            .copied()
+            .zip(self.m_pos[..n].iter().copied())
+    }
+}
+
+/// Tool identification in TOOL CALL.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum ToolId {
+    /// Tool number (literal or Q parameter).
+    Number(Value),
+    /// Tool name: byte range in the block text.
+    Name(usize, usize),
+}
+
+/// The words of TOOL CALL.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct ToolCall {
+    /// Tool; `None` keeps the current tool (new deltas or speed only).
+    pub tool: Option<ToolId>,
+    /// Tool axis letter.
+    pub axis: Option<AxisLetter>,
+    /// Spindle speed, rpm.
+    pub speed: Option<Value>,
+    /// Automatic feed (FAUTO), program units per minute.
+    pub feed: Option<Value>,
+    /// Length delta DL.
+    pub dl: Option<Value>,
+    /// Radius delta DR.
+    pub dr: Option<Value>,
+    /// Corner radius delta DR2 (recorded, not used yet).
+    pub dr2: Option<Value>,
+}
+
+/// What a block does. The words of the block stay in the [`Parser`] ([`Parser::words`],
+/// [`Parser::tool`], [`Parser::code`]), so that this value is small.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Stmt {
+    /// Nothing to execute (empty line, comment, headline, number only).
+    Empty,
+    /// `BEGIN PGM name MM|INCH`.
+    BeginPgm {
+        /// True for INCH.
+        inch: bool,
+    },
+    /// `END PGM name`.
+    EndPgm,
+    /// `BLK FORM 0.1 axis …` (corner 1) or `BLK FORM 0.2 …` (corner 2); corner 0 = another
+    /// blank form, not recorded yet.
+    BlkForm {
+        /// 1 = MIN point, 2 = MAX point, 0 = other form.
+        corner: u8,
+        /// Tool axis given in 0.1.
+        axis: Option<AxisLetter>,
+    },
+    /// `TOOL CALL …`.
+    ToolCall,
+    /// `L`.
+    Line,
+    /// `LP`.
+    LinePolar,
+    /// `C`.
+    Circle,
+    /// `CC`.
+    Centre,
+    /// `CR`.
+    CircleRadius,
+    /// `CT`.
+    CircleTangent,
+    /// `CP`.
+    CirclePolar,
+    /// `Qn = …` / `FN 0..8, 13`: the formula is in [`Parser::code`].
+    Assign {
+        /// The parameter assigned.
+        target: ParamRef,
+    },
+    /// A block of M words only.
+    Misc,
+    /// `STOP [M…]`.
+    Stop,
+    /// `LBL …`: a jump target, no action when reached.
+    Label,
+    /// A block type recognised but not implemented yet.
+    Unsupported {
+        /// Its keyword.
+        what: &'static str,
+        /// Function number (FN n) when relevant.
+        number: Option<u32>,
+    },
+}
+
+/// One parsed block.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Block {
+    /// Block number as written.
+    pub number: Option<u64>,
+    /// True when the block is marked `/` (skipped while block skip is on).
+    pub skip: bool,
+    /// Byte position of the block's first character.
+    pub start: usize,
+    /// The statement.
+    pub stmt: Stmt,
+}
+
+/// A syntax error at a byte position of the block text.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct ParseError {
+    /// Byte position in the block text.
+    pub pos: usize,
+    /// Block number when it was already read.
+    pub number: Option<u64>,
+    /// What is wrong.
+    pub error: ProgramError,
+}
+
+pub(super) type PResult<T> = Result<T, (usize, ProgramError)>;
+
+// Word classes a block type accepts.
+pub(super) const W_AXES: u8 = 1;
+pub(super) const W_POLAR: u8 = 2;
+pub(super) const W_DR: u8 = 4;
+pub(super) const W_RADIUS: u8 = 8;
+pub(super) const W_COMP: u8 = 16;
+pub(super) const W_FEED: u8 = 32;
+pub(super) const W_M: u8 = 64;
+pub(super) const PATH: u8 = W_COMP | W_FEED | W_M;
+
+/// Deepest parenthesis/function nesting accepted in a formula.
+pub(super) const MAX_DEPTH: u32 = 64;
+
+/// Parses blocks; owns the reused formula buffer.
+#[derive(Debug, Default)]
+pub(crate) struct Parser {
+    /// Postfix code of the last parsed assignment.
+    pub code: Vec<Rpn>,
+    /// Words of the last parsed path, CC, M, STOP or BLK FORM block.
+    pub words: Words,
+    /// Words of the last parsed TOOL CALL.
+    pub tool: ToolCall,
+}
+
+/// Upper-cases an identifier into a small stack buffer (longer ones are cut, which makes them
+/// unknown words).
+pub(super) fn upper(bytes: &[u8]) -> ([u8; 16], usize) {
+    let mut out = [0u8; 16];
+    let n = bytes.len().min(16);
+    for (o, b) in out.iter_mut().zip(bytes.iter()) {
+        *o = b.to_ascii_uppercase();
+    }
+    (out, if bytes.len() > 16 { 16 } else { n })
+}
+
+pub(super) fn text_of(bytes: &[u8]) -> String {
+    bytes.iter().map(|&b| char::from(b)).collect()
+}
+
+pub(super) fn describe(lx: &Lexer<'_>, t: Token) -> String {
+    match t.kind {
+        TokKind::End => "end of block".into(),
+        TokKind::Num => format!("number '{}'", text_of(lx.slice(t))),
+        TokKind::Ident => format!("word '{}'", text_of(lx.slice(t))),
+        TokKind::Str => format!("text \"{}\"", text_of(lx.slice(t))),
+        TokKind::Other => format!("character '{}'", char::from(t.byte)),
+        _ => format!("'{}'", text_of(lx.slice(t))),
+    }
+}
+
+pub(super) fn unexpected(lx: &Lexer<'_>, t: Token) -> (usize, ProgramError) {
+    if t.kind == TokKind::Placeholder {
+        return (t.start(), ProgramError::Placeholder(text_of(lx.slice(t))));
+    }
+    (t.start(), ProgramError::Unexpected(describe(lx, t)))
+}
+
+pub(super) fn axis_of(c: u8) -> Option<AxisLetter> {
+    Some(match c {
+        b'X' => AxisLetter::X,
+        b'Y' => AxisLetter::Y,
+        b'Z' => AxisLetter::Z,
+        b'A' => AxisLetter::A,
+        b'B' => AxisLetter::B,
+        b'C' => AxisLetter::C,
+        b'U' => AxisLetter::U,
+        b'V' => AxisLetter::V,
+        b'W' => AxisLetter::W,
+        _ => return None,
+    })
+}
+
+pub(super) fn param_kind(name: &[u8]) -> Option<ParamKind> {
+    match name {
+        b"Q" => Some(ParamKind::Q),
+        b"QL" => Some(ParamKind::QL),
+        b"QR" => Some(ParamKind::QR),
+        _ => None,
+    }
+}
+
+/// Result of reading a word's value.
+pub(super) enum Val {
+    /// Nothing follows the word.
+    None,
+    /// Only a sign follows (`DR+`); true for minus.
+    Sign(bool),
+    /// A value.
+    Some(Value),
+}
+
+/// Reads the parameter number after `Q`/`QL`/`QR`.
+pub(super) fn param_index(lx: &mut Lexer<'_>, kind: ParamKind, at: usize) -> PResult<ParamRef> {
+    let t = lx.peek();
+    let n = if t.kind == TokKind::Num {
+        lx.num(t)
+    } else {
+        -1.0
+    };
+    match t.kind {
+        TokKind::Num if n.fract() == 0.0 && n <= f64::from(MAX_PARAM) => {
+            lx.next_token();
+            Ok(ParamRef {
+                kind,
+                index: n as u32,
+            })
+        }
+        TokKind::Num => Err((
+            t.start(),
+            ProgramError::OutOfRange(format!(
+                "parameter number {n} is not an integer from 0 to {MAX_PARAM}"
+            )),
+        )),
+        _ => Err((at, ProgramError::MissingValue("Q".into()))),
+    }
+}
+
+/// Reads an optional signed number or parameter reference.
+pub(super) fn value(lx: &mut Lexer<'_>) -> PResult<Val> {
+    let mut neg = false;
+    let mut signed = false;
+    loop {
+        match lx.peek().kind {
+            TokKind::Plus => {
+                lx.next_token();
+                signed = true;
+            }
+            TokKind::Minus => {
+                lx.next_token();
+                signed = true;
+                neg = !neg;
+            }
+            _ => break,
+        }
+    }
+    let t = lx.peek();
+    match t.kind {
+        TokKind::Num => {
+            lx.next_token();
+            let v = lx.num(t);
+            Ok(Val::Some(Value::Num(if neg { -v } else { v })))
+        }
+        TokKind::Ident => {
+            let (u, n) = upper(lx.slice(t));
+            match param_kind(&u[..n]) {
+                Some(kind) => {
+                    lx.next_token();
+                    let param = param_index(lx, kind, t.start())?;
+                    Ok(Val::Some(Value::Param { param, negate: neg }))
+                }
+                None if signed => Ok(Val::Sign(neg)),
+                None => Ok(Val::None),
+            }
+        }
+        _ if signed => Ok(Val::Sign(neg)),
+        _ => Ok(Val::None),
+    }
+}
+
+/// Reads a value that must be present.
+pub(super) fn required(lx: &mut Lexer<'_>, word: &str, at: usize) -> PResult<Value> {
+    match value(lx)? {
+        Val::Some(v) => Ok(v),
+        _ => Err((at, ProgramError::MissingValue(word.into()))),
+    }
+}
+
+impl Parser {
+    /// Parses one block's text.
+    pub fn parse(&mut self, text: &[u8]) -> Result<Block, ParseError> {
+        let mut lx = Lexer::new(text, 0);
+        let mut number = None;
+        let mut skip = false;
+        let res;
+        let start;
+        if is_comment_block(text) {
+            start = lx.peek().start();
+            res = Ok(Stmt::Empty);
+        } else if let Some(p) = plain_prefix(text) {
+            // common form `12 L …`: no need for the token machinery to find the keyword
+            start = p.start;
+            number = p.number;
+            let kw = Token::new(TokKind::Ident, p.keyword.0, p.keyword.1);
+            res = self.dispatch(&mut lx, kw);
+        } else {
+            start = lx.peek().start();
+            res = self.parse_inner(&mut lx, &mut number, &mut skip);
+        }
+        match res {
+            Ok(stmt) => Ok(Block {
+                number,
+                skip,
+                start,
+                stmt,
+            }),
+            Err((pos, error)) => Err(ParseError { pos, number, error }),
+        }
+    }
+
+    fn parse_inner(
+        &mut self,
+        lx: &mut Lexer<'_>,
+        number: &mut Option<u64>,
+        skip: &mut bool,
+    ) -> PResult<Stmt> {
+        if lx.peek().kind == TokKind::Slash {
+            lx.next_token();
+            *skip = true;
+        }
+        let t = lx.peek();
+        let mut numbered = None;
+        match t.kind {
+            TokKind::Num => numbered = Some((lx.num(t), t)),
+            TokKind::Ident
+                if lx.slice(t).eq_ignore_ascii_case(b"N")
+                    && lx.byte_at(t.end()).is_some_and(|b| b.is_ascii_digit()) =>
+            {
+                lx.next_token();
+                let n = lx.peek();
+                if n.kind == TokKind::Num {
+                    numbered = Some((lx.num(n), n));
+                }
+            }
+            _ => {}
+        }
+        if let Some((n, tok)) = numbered {
+            lx.next_token();
+            if n.fract() != 0.0 || n > 1e15 {
+                return Err((
+                    tok.start(),
+                    ProgramError::OutOfRange(format!(
+                        "block number '{}' is not a whole number",
+                        text_of(lx.slice(tok))
+                    )),
+                ));
+            }
+            *number = Some(n as u64);
+        }
+        if lx.peek().kind == TokKind::Slash {
+            lx.next_token();
+            *skip = true;
+        }
+        let t = lx.peek();
+        match t.kind {
+            TokKind::End => return Ok(Stmt::Empty),
+            TokKind::Star | TokKind::LParen => return Ok(Stmt::Empty),
+            TokKind::Ident => {}
+            _ => return Err(unexpected(lx, t)),
+        }
+        self.dispatch(lx, t)
+    }
+
+    /// Parses the rest of a block from its keyword token `t` (not consumed yet).
+    fn dispatch(&mut self, lx: &mut Lexer<'_>, t: Token) -> PResult<Stmt> {
+        let (u, n) = upper(lx.slice(t));
+        let kw = &u[..n];
+        if kw == b"M" {
+            lx.set_pos(t.start());
+            self.words(lx, W_M, "M")?;
+            return Ok(Stmt::Misc);
+        }
+        lx.set_pos(t.end());
+        let unsupported = |what| Ok(Stmt::Unsupported { what, number: None });
+        match kw {
+            b"BEGIN" => {
+                self.expect_word(lx, b"PGM", "BEGIN PGM")?;
+                Ok(Stmt::BeginPgm {
+                    inch: self.program_unit(lx, t.start(), true)?,
+                })
+            }
+            b"END" => {
+                self.expect_word(lx, b"PGM", "END PGM")?;
+                self.program_unit(lx, t.start(), false)?;
+                Ok(Stmt::EndPgm)
+            }
+            b"BLK" => {
+                self.expect_word(lx, b"FORM", "BLK FORM")?;
+                self.blk_form(lx)
+            }
+            b"TOOL" => {
+                let w = lx.next_token();
+                let (u2, n2) = upper(lx.slice(w));
+                match (w.kind, &u2[..n2]) {
+                    (TokKind::Ident, b"CALL") => {
+                        self.tool = self.tool_call(lx)?;
+                        Ok(Stmt::ToolCall)
+                    }
+                    (TokKind::Ident, b"DEF") => unsupported("TOOL DEF"),
+                    _ => Err((
+                        w.start(),
+                        ProgramError::Missing("expected CALL or DEF after TOOL"),
+                    )),
+                }
+            }
+            b"L" => {
+                self.words(lx, W_AXES | PATH, "L")?;
+                Ok(Stmt::Line)
+            }
+            b"LP" => {
+                self.words(lx, W_AXES | W_POLAR | PATH, "LP")?;
+                Ok(Stmt::LinePolar)
+            }
+            b"C" => {
+                self.words(lx, W_AXES | W_DR | PATH, "C")?;
+                Ok(Stmt::Circle)
+            }
+            b"CC" => {
+                self.words(lx, W_AXES, "CC")?;
+                Ok(Stmt::Centre)
+            }
+            b"CR" => {
+                self.words(lx, W_AXES | W_DR | W_RADIUS | PATH, "CR")?;
+                Ok(Stmt::CircleRadius)
+            }
+            b"CT" => {
+                self.words(lx, W_AXES | PATH, "CT")?;
+                Ok(Stmt::CircleTangent)
+            }
+            b"CP" => {
+                self.words(lx, W_AXES | W_POLAR | W_DR | PATH, "CP")?;
+                if let Some(pr) = self.words.pr {
+                    return Err((
+                        pr.pos as usize,
+                        ProgramError::MisplacedWord {
+                            word: "PR".into(),
+                            block: "CP",
+                        },
+                    ));
+                }
+                Ok(Stmt::CirclePolar)
+            }
+            b"STOP" => {
+                self.words(lx, W_M, "STOP")?;
+                Ok(Stmt::Stop)
+            }
+            b"LBL" => Ok(Stmt::Label),
+            b"FN" => self.function(lx),
+            b"Q" | b"QL" | b"QR" => {
+                let kind = param_kind(kw).unwrap_or(ParamKind::Q);
+                let target = param_index(lx, kind, t.start())?;
+                self.assignment(lx, target)
+            }
+            b"QS" => unsupported("QS string parameters"),
+            b"CALL" => unsupported("CALL"),
+            b"CYCL" => unsupported("CYCL"),
+            b"APPR" => unsupported("APPR"),
+            b"DEP" => unsupported("DEP"),
+            b"RND" => unsupported("RND"),
+            b"CHF" => unsupported("CHF"),
+            b"SPL" => unsupported("SPL"),
+            b"CTP" => unsupported("CTP"),
+            b"FPOL" | b"FL" | b"FLT" | b"FC" | b"FCT" | b"FK" | b"FSELECT" => {
+                unsupported("FK free contour programming")
+            }
+            b"PLANE" => unsupported("PLANE"),
+            b"FUNCTION" => unsupported("FUNCTION"),
+            b"TCH" => unsupported("TCH PROBE"),
+            b"DECLARE" => unsupported("DECLARE"),
+            b"SEL" => unsupported("SEL"),
+            b"PATTERN" => unsupported("PATTERN"),
+            b"LN" => unsupported("LN"),
+            b"TRANS" => unsupported("TRANS"),
+            b"SYSCALL" => unsupported("SYSCALL"),
+            _ => Err((t.start(), ProgramError::UnknownBlock(text_of(lx.slice(t))))),
+        }
+    }
+
+    fn expect_word(&self, lx: &mut Lexer<'_>, word: &[u8], what: &'static str) -> PResult<()> {
+        let t = lx.next_token();
+        if t.kind == TokKind::Ident && lx.slice(t).eq_ignore_ascii_case(word) {
+            Ok(())
+        } else {
+            Err((t.start(), ProgramError::Missing(what_expected(what))))
+        }
+    }
+
+    /// Reads `name MM|INCH` after BEGIN/END PGM; returns true for INCH.
+    fn program_unit(&self, lx: &mut Lexer<'_>, at: usize, strict: bool) -> PResult<bool> {
+        let mut count = 0usize;
+        let mut last = None;
+        loop {
+            let t = lx.next_token();
+            if t.kind == TokKind::End {
+                break;
+            }
+            count += 1;
+            last = Some(t);
+        }
+        let unit = last.and_then(|t| {
+            if t.kind != TokKind::Ident {
+                return None;
+            }
+            let s = lx.slice(t);
+            if s.eq_ignore_ascii_case(b"MM") {
+                Some(false)
+            } else if s.eq_ignore_ascii_case(b"INCH") {
+                Some(true)
+            } else {
+                None
+            }
+        });
+        match unit {
+            Some(inch) if count >= 2 || !strict => Ok(inch),
+            Some(_) => Err((at, ProgramError::Missing("BEGIN PGM needs a program name"))),
+            None if strict => Err((
+                last.map_or(at, |t| t.start()),
+                ProgramError::Missing("BEGIN PGM needs the unit MM or INCH after the name"),
+            )),
+            None => Ok(false),
+        }
+    }
+
+    fn blk_form(&mut self, lx: &mut Lexer<'_>) -> PResult<Stmt> {
+        let t = lx.peek();
+        let v = if t.kind == TokKind::Num {
+            lx.num(t)
+        } else {
+            0.0
+        };
+        let corner = match t.kind {
+            TokKind::Num if (v - 0.1).abs() < 1e-9 => 1,
+            TokKind::Num if (v - 0.2).abs() < 1e-9 => 2,
+            _ => {
+                return Ok(Stmt::BlkForm {
+                    corner: 0,
+                    axis: None,
+                });
+            }
+        };
+        lx.next_token();
+        let mut axis = None;
+        if corner == 1 {
+            let a = lx.peek();
+            if a.kind == TokKind::Ident {
+                let s = lx.slice(a);
+                let next_is_value = matches!(
+                    lx.byte_at(a.end()),
+                    Some(b'+' | b'-' | b'0'..=b'9' | b'.' | b',')
+                );
+                if s.len() == 1 && !next_is_value {
+                    axis = axis_of(s[0].to_ascii_uppercase());
+                    if axis.is_some() {
+                        lx.next_token();
+                    }
+                }
+            }
+        }
+        self.words(lx, W_AXES, "BLK FORM")?;
+        Ok(Stmt::BlkForm { corner, axis })
+    }
+
+    fn tool_call(&mut self, lx: &mut Lexer<'_>) -> PResult<ToolCall> {
+        let mut tc = ToolCall::default();
+        let t = lx.peek();
+        match t.kind {
+            TokKind::Num => {
+                lx.next_token();
+                tc.tool = Some(ToolId::Number(Value::Num(lx.num(t))));
+            }
+            TokKind::Str => {
+                lx.next_token();
+                tc.tool = Some(ToolId::Name(t.start(), t.end()));
+            }
+            TokKind::Ident => {
+                let (u, n) = upper(lx.slice(t));
+                if let Some(kind) = param_kind(&u[..n]) {
+                    lx.next_token();
+                    let param = param_index(lx, kind, t.start())?;
+                    tc.tool = Some(ToolId::Number(Value::Param {
+                        param,
+                        negate: false,
+                    }));
+                }
+            }
+            _ => {}
+        }
+        let a = lx.peek();
+        if a.kind == TokKind::Ident {
+            let s = lx.slice(a);
+            if s.len() == 1 {
+                let c = s[0].to_ascii_uppercase();
+                if matches!(c, b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W') {
+                    lx.next_token();
+                    tc.axis = axis_of(c);
+                }
+            }
+        }
+        loop {
+            let t = lx.next_token();
+            match t.kind {
+                TokKind::End => break,
+                TokKind::Ident => {}
+                _ => return Err(unexpected(lx, t)),
+            }
+            let (u, n) = upper(lx.slice(t));
+            let (name, q) = split_q(&u[..n], |w| matches!(w, b"S" | b"F" | b"DL" | b"DR"));
+            let v = match q {
+                Some(kind) => Value::Param {
+                    param: param_index(lx, kind, t.start())?,
+                    negate: false,
+                },
+                None if name == b"DR" && lx.byte_at(t.end()) == Some(b'2') => {
+                    // DR2: the lexer split it into `DR` and the number; re-scan from after '2'
+                    let _ = lx.next_token();
+                    let v = required(lx, "DR2", t.start())?;
+                    set_once(&mut tc.dr2, v, "DR2", t.start())?;
+                    continue;
+                }
+                None => required(lx, &text_of(name), t.start())?,
+            };
+            let slot = match name {
+                b"S" => &mut tc.speed,
+                b"F" => &mut tc.feed,
+                b"DL" => &mut tc.dl,
+                b"DR" => &mut tc.dr,
+                _ => {
+                    return Err((
+                        t.start(),
+                        ProgramError::UnknownWord {
+                            word: text_of(lx.slice(t)),
+                            block: "TOOL CALL",
+                        },
+                    ));
+                }
+            };
+            set_once(slot, v, &text_of(name), t.start())?;
+        }
+        Ok(tc)
+    }
+}
+
+/// Where the block number and keyword of a block in the plain form `[nr ]KEYWORD[ …]` are.
+struct PlainPrefix {
+    /// First character of the block.
+    start: usize,
+    /// Block number.
+    number: Option<u64>,
+    /// Byte range of the upper-case keyword.
+    keyword: (usize, usize),
+}
+
+/// Recognises the plain block start `  12 L …` (spaces, up to 15 digits, spaces, upper-case
+/// letters followed by a blank or the end). Any other start (`N12`, `/`, `*`, `Q1=`, lower
+/// case, …) gives `None` and goes through the token path.
+fn plain_prefix(text: &[u8]) -> Option<PlainPrefix> {
+    let mut i = 0;
+    while matches!(text.get(i), Some(b' ' | b'\t')) {
+        i += 1;
+    }
+    let start = i;
+    let mut number = None;
+    if text.get(i).is_some_and(u8::is_ascii_digit) {
+        let mut n: u64 = 0;
+        let mut digits = 0;
+        while let Some(&c) = text.get(i) {
+            if !c.is_ascii_digit() {
+                break;
+            }
+            n = n * 10 + u64::from(c - b'0');
+            digits += 1;
+            i += 1;
+            if digits > 15 {
+                return None;
+            }
+        }
+        if !matches!(text.get(i), Some(b' ' | b'\t')) {
+            return None;
+        }
+        number = Some(n);
+        while matches!(text.get(i), Some(b' ' | b'\t')) {
+            i += 1;
+        }
+    }
+    let ks = i;
+    while text.get(i).is_some_and(u8::is_ascii_uppercase) {
+        i += 1;
+    }
+    if i == ks || !matches!(text.get(i), None | Some(b' ' | b'\t' | b'\r' | b'\n')) {
+        return None;
+    }
+    Some(PlainPrefix {
+        start,
+        number,
+        keyword: (ks, i),
+    })
+}
+
+/// True when the block is only a comment (`[/][N]nr ; text`). Such a comment may run over
+/// several `~`-continued lines, unlike a comment after a word, which ends with its line.
+fn is_comment_block(text: &[u8]) -> bool {
+    let mut i = 0;
+    let skip_ws = |i: &mut usize| {
+        while text.get(*i).is_some_and(|b| b.is_ascii_whitespace()) {
+            *i += 1;
+        }
+    };
+    skip_ws(&mut i);
+    if text.get(i) == Some(&b'/') {
+        i += 1;
+        skip_ws(&mut i);
+    }
+    if text.get(i).is_some_and(|b| b.eq_ignore_ascii_case(&b'N')) {
+        i += 1;
+    }
+    while text.get(i).is_some_and(u8::is_ascii_digit) {
+        i += 1;
+    }
+    skip_ws(&mut i);
+    text.get(i) == Some(&b';')
+}
+
+fn what_expected(what: &'static str) -> &'static str {
+    match what {
+        "BEGIN PGM" => "expected PGM after BEGIN",
+        "END PGM" => "expected PGM after END",
+        "BLK FORM" => "expected FORM after BLK",
+        _ => "unexpected word",
+    }
+}
+
+pub(super) fn set_once(slot: &mut Option<Value>, v: Value, name: &str, at: usize) -> PResult<()> {
+    if slot.is_some() {
+        return Err((at, ProgramError::DuplicateWord(name.into())));
+    }
+    *slot = Some(v);
+    Ok(())
+}

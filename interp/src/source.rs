@@ -1,0 +1,229 @@
+//! Streaming block reader: turns program bytes into logical blocks, one at a time.
+//!
+//! A block is one physical line, or several when a line ends in `~` (continuation). Line ends
+//! may be LF or CRLF; the last line needs no line end. The joined block text keeps the raw
+//! bytes (the `~` becomes a space, physical lines are joined with `\n`), so a `;` comment ends
+//! at the end of its physical line. Bytes are never decoded up front: columns are computed on
+//! demand, counting UTF-8 characters when the physical line is valid UTF-8 and bytes (latin-1)
+//! otherwise. Only the current block is held in memory; each block remembers the byte offset
+//! and line of its first physical line so that a later jump can seek back to it.
+
+use std::io::{self, BufRead, Seek, SeekFrom};
+
+/// A byte source the interpreter can read blocks from and seek in.
+pub(crate) trait ProgramInput: BufRead + Seek + Send {}
+impl<T: BufRead + Seek + Send> ProgramInput for T {}
+
+/// One physical line inside the joined block text.
+#[derive(Debug, Clone, Copy)]
+struct Segment {
+    /// Start of the line in the block buffer.
+    start: usize,
+    /// 1-based line number.
+    line: u32,
+}
+
+/// Where a block starts in the file.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct BlockStart {
+    /// Byte offset of the block's first physical line.
+    pub offset: u64,
+    /// 1-based line of that physical line.
+    pub line: u32,
+}
+
+/// Reads logical blocks from a program source into a reused buffer.
+pub(crate) struct BlockReader {
+    input: Box<dyn ProgramInput>,
+    buf: Vec<u8>,
+    segs: Vec<Segment>,
+    next_line: u32,
+    next_offset: u64,
+    /// Line and column just after the last byte read (for "missing at end of file").
+    end_pos: (u32, u32),
+}
+
+impl BlockReader {
+    /// Wraps a source positioned at its start.
+    pub fn new(input: Box<dyn ProgramInput>) -> Self {
+        BlockReader {
+            input,
+            buf: Vec::with_capacity(256),
+            segs: Vec::with_capacity(4),
+            next_line: 1,
+            next_offset: 0,
+            end_pos: (1, 1),
+        }
+    }
+
+    /// The text of the current block.
+    pub fn text(&self) -> &[u8] {
+        &self.buf
+    }
+
+    /// Line and column just after the end of the text read so far.
+    pub fn end_position(&self) -> (u32, u32) {
+        self.end_pos
+    }
+
+    /// Reads the next block; `Ok(None)` at end of input.
+    pub fn next_block(&mut self) -> io::Result<Option<BlockStart>> {
+        self.buf.clear();
+        self.segs.clear();
+        let start = BlockStart {
+            offset: self.next_offset,
+            line: self.next_line,
+        };
+        let mut any = false;
+        loop {
+            if !self.buf.is_empty() {
+                self.buf.push(b'\n');
+            }
+            let seg_start = self.buf.len();
+            let n = self.input.read_until(b'\n', &mut self.buf)?;
+            if n == 0 {
+                // nothing more: drop the separator pushed for a continuation
+                self.buf
+                    .truncate(seg_start.saturating_sub(usize::from(any)));
+                break;
+            }
+            any = true;
+            self.next_offset += n as u64;
+            let line_no = self.next_line;
+            self.next_line = self.next_line.saturating_add(1);
+            let mut end = self.buf.len();
+            let had_newline = self.buf.last() == Some(&b'\n');
+            if had_newline {
+                end -= 1;
+            }
+            if end > seg_start && self.buf.get(end - 1) == Some(&b'\r') {
+                end -= 1;
+            }
+            self.buf.truncate(end);
+            let body = self.buf.get(seg_start..).unwrap_or(&[]);
+            self.end_pos = if had_newline {
+                (self.next_line, 1)
+            } else {
+                (line_no, char_count(body) + 1)
+            };
+            self.segs.push(Segment {
+                start: seg_start,
+                line: line_no,
+            });
+            let trimmed = body
+                .iter()
+                .rposition(|b| !b.is_ascii_whitespace())
+                .map(|p| seg_start + p);
+            match trimmed {
+                Some(i) if self.buf.get(i) == Some(&b'~') => {
+                    if let Some(b) = self.buf.get_mut(i) {
+                        *b = b' ';
+                    }
+                }
+                _ => break,
+            }
+        }
+        Ok(if any { Some(start) } else { None })
+    }
+
+    /// Line and column (1-based, in characters) of a byte position in the current block.
+    pub fn position(&self, pos: usize) -> (u32, u32) {
+        let pos = pos.min(self.buf.len());
+        let seg_index = self.segs.iter().rposition(|s| s.start <= pos).unwrap_or(0);
+        let Some(seg) = self.segs.get(seg_index) else {
+            return (self.next_line, 1);
+        };
+        let seg_end = self
+            .segs
+            .get(seg_index + 1)
+            .map_or(self.buf.len(), |s| s.start.saturating_sub(1));
+        let line_bytes = self.buf.get(seg.start..seg_end).unwrap_or(&[]);
+        let prefix = self.buf.get(seg.start..pos).unwrap_or(&[]);
+        if prefix.is_ascii() {
+            // ASCII counts one character per byte in UTF-8 and latin-1 alike
+            return (seg.line, prefix.len() as u32 + 1);
+        }
+        let col = if std::str::from_utf8(line_bytes).is_ok() {
+            char_count(prefix)
+        } else {
+            prefix.len() as u32
+        };
+        (seg.line, col + 1)
+    }
+
+    /// Moves the reader so that the next block read starts at `start` (for jumps).
+    #[allow(dead_code)]
+    pub fn seek(&mut self, start: BlockStart) -> io::Result<()> {
+        self.input.seek(SeekFrom::Start(start.offset))?;
+        self.next_offset = start.offset;
+        self.next_line = start.line;
+        Ok(())
+    }
+}
+
+/// Characters in a UTF-8 byte slice, counting latin-1 bytes as one each when invalid.
+fn char_count(bytes: &[u8]) -> u32 {
+    if std::str::from_utf8(bytes).is_ok() {
+        bytes.iter().filter(|&&b| (b & 0xC0) != 0x80).count() as u32
+    } else {
+        bytes.len() as u32
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::io::Cursor;
+
+    fn reader(text: &[u8]) -> BlockReader {
+        BlockReader::new(Box::new(Cursor::new(text.to_vec())))
+    }
+
+    #[test]
+    fn joins_continuation_lines_and_tracks_lines() {
+        let mut r = reader(b"1 Q1 = 2 + ~\r\n   3\r\n2 L X+1");
+        let b = r.next_block().unwrap().unwrap();
+        assert_eq!(b, BlockStart { offset: 0, line: 1 });
+        assert_eq!(r.text(), b"1 Q1 = 2 +  \n   3");
+        // the `3` sits on line 2, column 4
+        let pos = r.text().iter().position(|&c| c == b'3').unwrap();
+        assert_eq!(r.position(pos), (2, 4));
+        let b = r.next_block().unwrap().unwrap();
+        assert_eq!(
+            b,
+            BlockStart {
+                offset: 20,
+                line: 3
+            }
+        );
+        assert_eq!(r.text(), b"2 L X+1");
+        assert_eq!(r.end_position(), (3, 8));
+        assert!(r.next_block().unwrap().is_none());
+    }
+
+    #[test]
+    fn columns_count_characters_or_latin1_bytes() {
+        // "ä" in UTF-8 is two bytes, one character
+        let mut r = reader("; ä X\n".as_bytes());
+        r.next_block().unwrap();
+        let x = r.text().iter().position(|&c| c == b'X').unwrap();
+        assert_eq!(r.position(x), (1, 5));
+        // 0xE4 alone is latin-1 "ä": one byte, one character
+        let mut r = reader(b"; \xE4 X\n");
+        r.next_block().unwrap();
+        let x = r.text().iter().position(|&c| c == b'X').unwrap();
+        assert_eq!(r.position(x), (1, 5));
+    }
+
+    #[test]
+    fn seek_rereads_a_block() {
+        let mut r = reader(b"A\nB\nC\n");
+        r.next_block().unwrap();
+        let b = r.next_block().unwrap().unwrap();
+        r.next_block().unwrap();
+        r.seek(b).unwrap();
+        let again = r.next_block().unwrap().unwrap();
+        assert_eq!(again, b);
+        assert_eq!(r.text(), b"B");
+    }
+}

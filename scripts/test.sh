@@ -1,0 +1,7 @@
+#!/usr/bin/env bash
+# Runs the whole test suite: installs the Python protocol peers (once), then every test of the
+# workspace.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+scripts/setup-peers.sh
+cargo test --workspace "$@"
