@@ -1,0 +1,705 @@
+//! The look-ahead planner and its sampler: ops in, time-stamped samples and events out.
+//!
+//! Motion ops become path elements ([`crate::geom::Segment`]); corners between elements
+//! are blended inside the active path tolerance ([`path`]); a jerk-limited speed generator
+//! moves along the blended path one servo period at a time ([`speed`]), looking ahead over
+//! the pieces within its braking distance. There is no per-element profile: speed carries
+//! across elements, so short elements cost no time of their own.
+//!
+//! Ops without motion reach the caller as [`Step::Event`]s, in order, before the first
+//! sample taken after the path reaches the point where they take effect. These need the
+//! machine standing on their point, so the path stops exactly there first (the last sample
+//! before the event is on the point): dwell (which also holds for its time), tool change,
+//! spindle and C-axis changes, program stops, the program end and explicit exact stops.
+//! Coolant, tolerance and radius-compensation ops do not stop or flush the look-ahead.
+//! [`OpKind::Tolerance`] sets the tolerance for the corners after it (`None`: the
+//! configured default). Radius compensation is the job of the stage before the planner;
+//! the planner follows the path it is given.
+//!
+//! Feed override (0–150 %, [`Planner::set_feed_override`]) and feed hold
+//! ([`Planner::hold`], [`Planner::resume`]) act at once with jerk-limited speed changes on
+//! the path.
+
+pub mod path;
+pub mod speed;
+
+use crate::config::PlannerConfig;
+use crate::error::MotionError;
+use crate::geom::{Arc, GeomError, Line, Poly, Segment, finite_pose, letter};
+use crate::profile::Ramp;
+use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
+use path::{Committed, Element, MAX_OVERRIDE, Piece, PieceError, Shape, commit, piece_limits};
+use speed::{Limit, Motion, Window};
+use std::collections::VecDeque;
+
+/// Pieces and events the planner holds at most before it stops asking for input (memory
+/// bound; the look-ahead distance is what normally decides).
+pub const BUFFER_CAPACITY: usize = 20_000;
+
+/// Largest gap (mm or degrees) accepted between an op's start and the previous end point.
+/// The planner always continues from its own end point, so accepted gaps do not jump.
+pub const CONTINUITY_TOLERANCE: f64 = 1e-6;
+
+/// Distance (mm) within which a standstill counts as reaching a stop point.
+const STOP_SNAP: f64 = 1e-6;
+
+/// Elements kept back for corner decisions.
+const ELEMENTS_AHEAD: usize = 3;
+
+/// The commanded state of all program axes at one servo instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Time in seconds since the start: exactly `k · period`.
+    pub t: f64,
+    /// Commanded program position (mm, degrees).
+    pub pose: Pose,
+    /// Commanded velocity per axis (mm/s, °/s), indexed like the pose.
+    pub velocity: [f64; 9],
+    /// Commanded acceleration per axis (mm/s², °/s²), indexed like the pose.
+    pub acceleration: [f64; 9],
+    /// The block being executed.
+    pub loc: SourceLoc,
+}
+
+/// What the planner hands to the servo loop next.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Step {
+    /// One servo cycle's setpoint.
+    Sample(Sample),
+    /// A non-motion op reaching the servo loop at the time it takes effect.
+    Event(Op),
+}
+
+/// Something that happens at a path position.
+#[derive(Debug, Clone)]
+enum Marker {
+    /// An op that takes effect when the path gets there.
+    Event { at: f64, op: Op },
+    /// A standstill at `at`, then the op (if any), then a hold of `dwell` seconds.
+    Stop {
+        at: f64,
+        op: Option<Op>,
+        dwell: f64,
+    },
+}
+
+/// An element waiting for its corners, with the events that follow it.
+#[derive(Debug, Clone)]
+struct Waiting {
+    element: Element,
+    events: Vec<Op>,
+}
+
+/// The planner: takes ops, gives samples at the servo period.
+///
+/// Call [`Planner::push`] while [`Planner::needs_input`] is true (or [`Planner::finish`] when
+/// the ops run out), then [`Planner::next_step`]. It asks for input until the planned path
+/// reaches beyond the braking distance from the machine's top speed, and holds at most
+/// [`BUFFER_CAPACITY`] pieces and events, so memory stays constant however long the program.
+#[derive(Debug, Clone)]
+pub struct Planner {
+    config: PlannerConfig,
+    /// Tolerance for the corners from now on.
+    tolerance: f64,
+    /// Look-ahead distance wanted beyond the current position.
+    horizon: f64,
+    /// Lowest path acceleration and jerk of any piece (for the scan distance).
+    accel_floor: f64,
+    jerk_floor: f64,
+    waiting: VecDeque<Waiting>,
+    /// Events before the first waiting element (placed at the planned end).
+    pieces: VecDeque<Piece>,
+    markers: VecDeque<Marker>,
+    /// End of the committed path.
+    committed_end: f64,
+    /// End pose of everything pushed so far.
+    planned_pose: Pose,
+    /// Pose and block where the machine stands when no piece is left.
+    rest_pose: Pose,
+    rest_loc: SourceLoc,
+    state: Motion,
+    /// Path position the last computed state reached (events up to here are due).
+    reached: f64,
+    stash: Option<Sample>,
+    hold_until: Option<(f64, SourceLoc)>,
+    window: Window,
+    factor: f64,
+    held: bool,
+    cycles: u64,
+    finished: bool,
+}
+
+impl Planner {
+    /// A planner for a machine standing at `start`.
+    pub fn new(config: PlannerConfig, start: Pose) -> Result<Self, MotionError> {
+        config.validate()?;
+        if let Some(i) = start.0.iter().position(|v| !v.is_finite()) {
+            return Err(crate::config::ConfigError::BadStart(letter(i)).into());
+        }
+        let axes = config.limits.iter().flatten();
+        let top = axes
+            .clone()
+            .map(|l| l.max_velocity * l.max_velocity)
+            .sum::<f64>()
+            .sqrt()
+            * MAX_OVERRIDE;
+        let accel_floor = axes
+            .clone()
+            .map(|l| l.max_acceleration)
+            .fold(f64::INFINITY, f64::min)
+            / 2.0;
+        let jerk_floor = axes.map(|l| l.max_jerk).fold(f64::INFINITY, f64::min) / 2.0;
+        let horizon = 2.0 * Ramp::new(top, 0.0, 0.0, accel_floor, jerk_floor).distance()
+            + 4.0 * top * config.period
+            + 1.0;
+        Ok(Planner {
+            tolerance: config.tolerance,
+            config,
+            horizon,
+            accel_floor,
+            jerk_floor,
+            waiting: VecDeque::new(),
+            pieces: VecDeque::new(),
+            markers: VecDeque::new(),
+            committed_end: 0.0,
+            planned_pose: start,
+            rest_pose: start,
+            rest_loc: SourceLoc::default(),
+            state: Motion::default(),
+            reached: 0.0,
+            stash: None,
+            hold_until: None,
+            window: Window::default(),
+            factor: 1.0,
+            held: false,
+            cycles: 0,
+            finished: false,
+        })
+    }
+
+    /// The configuration in use.
+    pub fn config(&self) -> &PlannerConfig {
+        &self.config
+    }
+
+    /// True while the planner wants more ops (or [`Planner::finish`]) before sampling on:
+    /// until the committed path reaches beyond the look-ahead distance.
+    pub fn needs_input(&self) -> bool {
+        !self.finished
+            && self.pieces.len() + self.markers.len() + self.waiting.len() < BUFFER_CAPACITY
+            && self.committed_end - self.state.s < self.horizon
+    }
+
+    /// Time of the last sample given out, in seconds. (The look-ahead planner decides the
+    /// timing as it goes, so this is the program time executed so far.)
+    pub fn planned_time(&self) -> f64 {
+        self.time()
+    }
+
+    /// End point of everything pushed so far.
+    pub fn planned_pose(&self) -> Pose {
+        self.planned_pose
+    }
+
+    /// Time of the last sample given out (0 before the first).
+    pub fn time(&self) -> f64 {
+        self.cycles as f64 * self.config.period
+    }
+
+    /// The look-ahead distance the planner fills before it stops asking for input (mm).
+    pub fn horizon(&self) -> f64 {
+        self.horizon
+    }
+
+    /// Sets the feed override as a factor of the programmed feed, clamped to 0–1.5 (a
+    /// value that is not a number leaves it unchanged). Rapid traverse is scaled too, up to
+    /// the axes' limits. Returns the factor in force.
+    pub fn set_feed_override(&mut self, factor: f64) -> f64 {
+        if !factor.is_nan() {
+            self.factor = factor.clamp(0.0, MAX_OVERRIDE);
+        }
+        self.factor
+    }
+
+    /// The feed override factor in force.
+    pub fn feed_override(&self) -> f64 {
+        self.factor
+    }
+
+    /// Feed hold: brakes to a standstill on the path (jerk-limited) and stays there.
+    pub fn hold(&mut self) {
+        self.held = true;
+    }
+
+    /// Ends a feed hold: speeds up again along the path.
+    pub fn resume(&mut self) {
+        self.held = false;
+    }
+
+    /// True while a feed hold is requested.
+    pub fn is_held(&self) -> bool {
+        self.held
+    }
+
+    /// Current path speed (mm/s, or °/s on rotary-only moves).
+    pub fn path_speed(&self) -> f64 {
+        self.state.v
+    }
+
+    /// Adds one op to the end of the path.
+    pub fn push(&mut self, op: Op) -> Result<(), MotionError> {
+        let loc = op.loc;
+        if self.finished {
+            return Err(MotionError::AfterFinish { loc });
+        }
+        if self.pieces.len() + self.markers.len() + self.waiting.len() >= BUFFER_CAPACITY {
+            return Err(MotionError::BufferFull { loc });
+        }
+        let geometry = |e| MotionError::Geometry { loc, source: e };
+        let start = self.planned_pose;
+        let (segment, feed) = match &op.kind {
+            OpKind::Line { from, to, feed } => {
+                self.check_start(from, loc)?;
+                let feed = path_feed(*feed, loc)?;
+                (
+                    Line::new(start, *to).map_err(geometry)?.map(Segment::Line),
+                    feed,
+                )
+            }
+            OpKind::Arc {
+                from,
+                to,
+                center,
+                plane,
+                sweep,
+                feed,
+            } => {
+                self.check_start(from, loc)?;
+                let feed = path_feed(*feed, loc)?;
+                let segment =
+                    match Arc::new(start, *to, *center, *plane, *sweep).map_err(geometry)? {
+                        Some(arc) => Some(Segment::Arc(arc)),
+                        None => Line::new(start, *to).map_err(geometry)?.map(Segment::Line),
+                    };
+                (segment, feed)
+            }
+            OpKind::Spline {
+                from,
+                to,
+                axes,
+                feed,
+            } => {
+                self.check_start(from, loc)?;
+                let feed = path_feed(*feed, loc)?;
+                (
+                    Poly::new(start, *to, axes)
+                        .map_err(geometry)?
+                        .map(|p| Segment::Poly(Box::new(p))),
+                    feed,
+                )
+            }
+            OpKind::Approach { .. } | OpKind::Depart { .. } => {
+                return Err(MotionError::UnresolvedApproach { loc });
+            }
+            OpKind::Dwell { seconds } => {
+                let seconds = *seconds;
+                if !(seconds.is_finite() && seconds >= 0.0) {
+                    return Err(MotionError::BadDwell { loc, seconds });
+                }
+                self.flush()?;
+                self.markers.push_back(Marker::Stop {
+                    at: self.committed_end,
+                    op: Some(op),
+                    dwell: seconds,
+                });
+                return Ok(());
+            }
+            OpKind::Tolerance { mm } => {
+                let mm = match mm {
+                    Some(mm) if !(mm.is_finite() && *mm >= 0.0) => {
+                        return Err(MotionError::BadTolerance { loc, mm: *mm });
+                    }
+                    Some(mm) => *mm,
+                    None => self.config.tolerance,
+                };
+                self.tolerance = mm;
+                self.add_event(op);
+                return Ok(());
+            }
+            OpKind::Stop { .. }
+            | OpKind::End
+            | OpKind::ToolChange { .. }
+            | OpKind::Spindle { .. }
+            | OpKind::CAxis { .. }
+            | OpKind::ExactStop => {
+                self.flush()?;
+                self.markers.push_back(Marker::Stop {
+                    at: self.committed_end,
+                    op: Some(op),
+                    dwell: 0.0,
+                });
+                return Ok(());
+            }
+            OpKind::Coolant { .. } | OpKind::RadiusComp { .. } => {
+                self.add_event(op);
+                return Ok(());
+            }
+        };
+        let Some(segment) = segment else {
+            tracing::trace!(line = loc.line, "zero-length move skipped");
+            return Ok(());
+        };
+        if !segment.length().is_finite() {
+            return Err(MotionError::Geometry {
+                loc,
+                source: GeomError::NonFinite("path length"),
+            });
+        }
+        // Refuse absent axes and unusable limits now, at the op that causes them.
+        let whole = Shape::Element(segment.clone());
+        piece_limits(&whole, segment.length(), feed, &self.config.limits)
+            .map_err(|e| piece_error(e, loc))?;
+        self.planned_pose = segment.end();
+        self.waiting.push_back(Waiting {
+            element: Element {
+                segment,
+                feed,
+                loc,
+                tolerance: self.tolerance,
+                trim: 0.0,
+                split: None,
+            },
+            events: Vec::new(),
+        });
+        while self.waiting.len() >= ELEMENTS_AHEAD {
+            self.commit_front(false)?;
+        }
+        Ok(())
+    }
+
+    /// A non-motion op that needs no stop: after the last waiting element, or at the end
+    /// of the committed path.
+    fn add_event(&mut self, op: Op) {
+        match self.waiting.back_mut() {
+            Some(w) => w.events.push(op),
+            None => self.markers.push_back(Marker::Event {
+                at: self.committed_end,
+                op,
+            }),
+        }
+    }
+
+    /// Commits every waiting element, the last one ending in a stop.
+    fn flush(&mut self) -> Result<(), MotionError> {
+        while !self.waiting.is_empty() {
+            self.commit_front(true)?;
+        }
+        Ok(())
+    }
+
+    /// Cuts the front element at its next corner and appends its pieces to the path.
+    fn commit_front(&mut self, flushing: bool) -> Result<(), MotionError> {
+        let Some(mut front) = self.waiting.pop_front() else {
+            return Ok(());
+        };
+        let done: Committed = {
+            let mut rest = self.waiting.iter_mut();
+            let next = rest.next().map(|w| &mut w.element);
+            let after = rest.next().map(|w| &w.element);
+            let after = if flushing { None } else { after };
+            commit(&mut front.element, next, after)
+        };
+        if done.stop_first {
+            self.add_stop(self.committed_end);
+        }
+        let mut events_at = self.committed_end;
+        for (shape, offset, length, feed, loc) in done.pieces {
+            let is_element = matches!(shape, Shape::Element(_));
+            let l = piece_limits(&shape, length, feed, &self.config.limits)
+                .map_err(|e| piece_error(e, loc))?;
+            self.pieces.push_back(Piece {
+                shape,
+                offset,
+                length,
+                start: self.committed_end,
+                vmax: l.velocity,
+                feed,
+                accel: l.acceleration,
+                jerk: l.jerk,
+                loc,
+            });
+            self.committed_end += length;
+            if is_element {
+                events_at = self.committed_end;
+            }
+        }
+        for op in front.events {
+            self.markers.push_back(Marker::Event { at: events_at, op });
+        }
+        if done.stop_at_end && !(flushing && self.waiting.is_empty()) {
+            self.add_stop(self.committed_end);
+        }
+        Ok(())
+    }
+
+    /// A plain standstill at `at`.
+    fn add_stop(&mut self, at: f64) {
+        self.markers.push_back(Marker::Stop {
+            at,
+            op: None,
+            dwell: 0.0,
+        });
+    }
+
+    /// Declares the end of input: the planner drains what it holds.
+    pub fn finish(&mut self) {
+        if !self.finished {
+            // Elements were checked when pushed; committing them cannot fail on limits.
+            if let Err(e) = self.flush() {
+                tracing::warn!(error = %e, "dropping the rest of the path");
+                self.waiting.clear();
+            }
+            self.finished = true;
+        }
+    }
+
+    fn at_rest(&self) -> bool {
+        self.state.v <= 1e-9 && self.state.a.abs() <= 1e-6
+    }
+
+    /// The next sample or event; `None` once finished and drained (or, before
+    /// [`Planner::finish`], when it needs input first).
+    pub fn next_step(&mut self) -> Option<Step> {
+        loop {
+            match self.markers.front() {
+                Some(Marker::Event { at, .. }) if *at <= self.reached + 1e-9 => {
+                    if let Some(Marker::Event { op, .. }) = self.markers.pop_front() {
+                        return Some(Step::Event(op));
+                    }
+                }
+                Some(Marker::Stop { at, .. })
+                    if self.stash.is_none()
+                        && self.at_rest()
+                        && (*at - self.state.s).abs() <= STOP_SNAP =>
+                {
+                    let at = *at;
+                    self.state = Motion {
+                        s: at,
+                        v: 0.0,
+                        a: 0.0,
+                    };
+                    self.reached = at;
+                    if let Some(Marker::Stop { op, dwell, .. }) = self.markers.pop_front() {
+                        if dwell > 0.0 {
+                            let loc = op.as_ref().map_or(self.rest_loc, |o| o.loc);
+                            self.hold_until = Some((self.time() + dwell, loc));
+                        }
+                        if let Some(op) = op {
+                            return Some(Step::Event(op));
+                        }
+                    }
+                    continue;
+                }
+                _ => {}
+            }
+            if let Some(sample) = self.stash.take() {
+                return Some(Step::Sample(sample));
+            }
+            let t = (self.cycles + 1) as f64 * self.config.period;
+            if let Some((end, loc)) = self.hold_until {
+                if t <= end + 1e-9 {
+                    self.cycles += 1;
+                    let pose = self.pose_here();
+                    return Some(Step::Sample(Sample {
+                        t,
+                        pose,
+                        velocity: [0.0; 9],
+                        acceleration: [0.0; 9],
+                        loc,
+                    }));
+                }
+                self.hold_until = None;
+            }
+            if !self.finished && self.needs_input() {
+                return None;
+            }
+            if self.finished
+                && self.markers.is_empty()
+                && self.at_rest()
+                && self.state.s >= self.committed_end - STOP_SNAP
+            {
+                return None;
+            }
+            let sample = self.advance(t);
+            self.cycles += 1;
+            if matches!(self.markers.front(), Some(Marker::Event { at, .. }) if *at <= self.reached + 1e-9)
+            {
+                self.stash = Some(sample);
+                continue;
+            }
+            return Some(Step::Sample(sample));
+        }
+    }
+
+    /// Where the machine stands: on the current piece, or at rest after the last one.
+    fn pose_here(&self) -> Pose {
+        match self.pieces.front() {
+            Some(p) => p.point(self.state.s).pose,
+            None => self.rest_pose,
+        }
+    }
+
+    /// Moves the path state on by one period and samples it at time `t`.
+    fn advance(&mut self, t: f64) -> Sample {
+        self.scan();
+        let target = match (self.held, self.pieces.front()) {
+            (false, Some(p)) => p.speed_limit(self.factor),
+            _ => 0.0,
+        };
+        let mut next = speed::advance(&self.state, target, &self.window, self.config.period);
+        // Never past the end of the committed path or the next stop.
+        let stop = self.next_stop();
+        if next.s > stop {
+            tracing::warn!(over = next.s - stop, "path state clamped at a stop point");
+            next = Motion {
+                s: stop,
+                v: 0.0,
+                a: 0.0,
+            };
+        }
+        if next.v < 0.0 {
+            next.v = 0.0;
+        }
+        self.state = next;
+        self.reached = next.s;
+        while self.pieces.len() > 1 && self.pieces.front().is_some_and(|p| p.end() < next.s) {
+            if let Some(p) = self.pieces.pop_front() {
+                self.rest_pose = p.point(p.end()).pose;
+                self.rest_loc = p.loc;
+            }
+        }
+        match self.pieces.front() {
+            Some(p) => {
+                let point = p.point(next.s);
+                let mut velocity = [0.0; 9];
+                let mut acceleration = [0.0; 9];
+                for i in 0..9 {
+                    velocity[i] = point.d1[i] * next.v;
+                    acceleration[i] = point.d1[i] * next.a + point.d2[i] * next.v * next.v;
+                }
+                Sample {
+                    t,
+                    pose: point.pose,
+                    velocity,
+                    acceleration,
+                    loc: p.loc,
+                }
+            }
+            None => Sample {
+                t,
+                pose: self.rest_pose,
+                velocity: [0.0; 9],
+                acceleration: [0.0; 9],
+                loc: self.rest_loc,
+            },
+        }
+    }
+
+    /// The next point where the path must stand still.
+    fn next_stop(&self) -> f64 {
+        self.markers
+            .iter()
+            .find_map(|m| match m {
+                Marker::Stop { at, .. } => Some(*at),
+                Marker::Event { .. } => None,
+            })
+            .unwrap_or(self.committed_end)
+            .min(self.committed_end)
+    }
+
+    /// Collects the speed limits ahead that can matter within the braking distance.
+    fn scan(&mut self) {
+        let s = self.state.s;
+        let stop = self.next_stop();
+        let current = match self.pieces.front() {
+            Some(p) => p.speed_limit(self.factor),
+            None => 0.0,
+        };
+        let vh = self.state.v.max(current);
+        let range = 2.0
+            * Ramp::new(vh, self.state.a.max(0.0), 0.0, self.accel_floor, self.jerk_floor)
+                .distance()
+            + 2.0 * vh * self.config.period
+            + 1e-9;
+        let w = &mut self.window;
+        w.limits.clear();
+        w.accel = f64::INFINITY;
+        w.jerk = f64::INFINITY;
+        let mut lowest = f64::INFINITY;
+        for p in &self.pieces {
+            if p.start - s > range || p.start >= stop {
+                break;
+            }
+            w.accel = w.accel.min(p.accel);
+            w.jerk = w.jerk.min(p.jerk);
+            let limit = p.speed_limit(self.factor);
+            if limit < lowest {
+                lowest = limit;
+                w.limits.push(Limit {
+                    at: p.start,
+                    speed: limit,
+                });
+            }
+        }
+        if stop - s <= range {
+            w.limits.push(Limit {
+                at: stop,
+                speed: 0.0,
+            });
+        }
+        if !w.accel.is_finite() {
+            w.accel = self.accel_floor;
+            w.jerk = self.jerk_floor;
+        }
+    }
+
+    /// Refuses an op that does not start at the previous end point.
+    fn check_start(&self, from: &Pose, loc: SourceLoc) -> Result<(), MotionError> {
+        if !finite_pose(from) {
+            let i = from.0.iter().position(|v| !v.is_finite()).unwrap_or(0);
+            return Err(MotionError::Discontinuity {
+                loc,
+                axis: letter(i),
+                gap: f64::NAN,
+            });
+        }
+        for (i, (a, b)) in from.0.iter().zip(&self.planned_pose.0).enumerate() {
+            let gap = (a - b).abs();
+            if gap > CONTINUITY_TOLERANCE {
+                return Err(MotionError::Discontinuity {
+                    loc,
+                    axis: letter(i),
+                    gap,
+                });
+            }
+        }
+        Ok(())
+    }
+}
+
+fn piece_error(e: PieceError, loc: SourceLoc) -> MotionError {
+    match e {
+        PieceError::Absent(axis) => MotionError::AbsentAxis { loc, axis },
+        PieceError::Unplannable => MotionError::Unplannable { loc },
+    }
+}
+
+/// The path speed limit of a feed: `None` for rapid traverse.
+fn path_feed(feed: Feed, loc: SourceLoc) -> Result<Option<f64>, MotionError> {
+    match feed {
+        Feed::Rapid => Ok(None),
+        Feed::Rate(f) if f.is_finite() && f > 0.0 => Ok(Some(f)),
+        Feed::Rate(f) => Err(MotionError::BadFeed { loc, feed: f }),
+        Feed::PerRevolution(_) => Err(MotionError::NeedsSpindle { loc }),
+    }
+}

@@ -1,0 +1,353 @@
+//! The blended path: programmed elements cut back at their corners and joined by blend
+//! curves, as a queue of [`Piece`]s with their speed, acceleration and jerk limits.
+//!
+//! Elements wait in a short queue until the element after the next is known, because the
+//! blend at a corner may pass through the middle of a short line (a *split point*, see
+//! below). Then the front element is cut and committed: its remaining part, then the blend.
+//!
+//! Corner rules, for two consecutive elements without a stop between them:
+//! * already curvature-continuous (same tangent, same curvature vector): no blend;
+//! * tolerance 0, rotary-only moves, or no blend found: exact stop at the corner;
+//! * otherwise a [`Quintic`] blend whose distance from the programmed contour is checked
+//!   against the tolerance ([`blend_within`]); it is made as long as the tolerance allows,
+//!   at most half of each element.
+//!
+//! Split points make dense CAM code smooth. A short line between two gentle corners is
+//! consumed completely by the blends at its ends; they meet at its midpoint with its
+//! direction and a curvature vector estimated from the neighbouring directions
+//! (κ ≈ Δt/Δs over the two neighbouring midpoints), instead of the line's zero curvature.
+//! A polyline approximating a circle then becomes a curve of almost constant curvature.
+
+use crate::blend::{ContourPart, Quintic, blend_within};
+use crate::config::AxisLimits;
+use crate::geom::{Metric, PathPoint, Segment};
+use crate::limits::{LimitError, path_limits};
+use crate::profile::PathLimits;
+use klar_interp::SourceLoc;
+
+/// Largest feed override, as a factor: path limits are prepared for it.
+pub const MAX_OVERRIDE: f64 = 1.5;
+
+/// Largest turning angle (radians) at either end of a line that may become a split point.
+const SPLIT_MAX_ANGLE: f64 = 0.3;
+
+/// Tangent and curvature differences below which two elements already join smoothly.
+const SMOOTH_TANGENT: f64 = 1e-9;
+const SMOOTH_CURVATURE: f64 = 1e-7;
+
+/// Attempts at shrinking a blend before giving up.
+const BLEND_ATTEMPTS: usize = 24;
+
+/// Shortest blend half-length tried (mm).
+const MIN_BLEND: f64 = 1e-6;
+
+/// The geometry a piece follows.
+#[derive(Debug, Clone)]
+pub enum Shape {
+    /// (Part of) a programmed element.
+    Element(Segment),
+    /// A blend curve.
+    Blend(Box<Quintic>),
+}
+
+impl Shape {
+    fn point(&self, s: f64) -> PathPoint {
+        match self {
+            Shape::Element(g) => g.point(s),
+            Shape::Blend(q) => q.point(s),
+        }
+    }
+}
+
+/// One piece of the blended path with constant limits.
+#[derive(Debug, Clone)]
+pub struct Piece {
+    /// The geometry.
+    pub shape: Shape,
+    /// Where on the shape the piece starts (local path distance).
+    pub offset: f64,
+    /// Length of the piece.
+    pub length: f64,
+    /// Path distance of its start from the start of the program.
+    pub start: f64,
+    /// Largest path speed the axes allow (with the feed times [`MAX_OVERRIDE`]).
+    pub vmax: f64,
+    /// Programmed feed (`None`: rapid).
+    pub feed: Option<f64>,
+    /// Path acceleration limit.
+    pub accel: f64,
+    /// Path jerk limit.
+    pub jerk: f64,
+    /// The block it comes from.
+    pub loc: SourceLoc,
+}
+
+impl Piece {
+    /// End of the piece as a path distance.
+    pub fn end(&self) -> f64 {
+        self.start + self.length
+    }
+
+    /// Speed limit under feed override `factor`.
+    pub fn speed_limit(&self, factor: f64) -> f64 {
+        match self.feed {
+            Some(f) => self.vmax.min(f * factor),
+            None => self.vmax.min(self.vmax * factor),
+        }
+    }
+
+    /// Pose and derivatives at path distance `s` (global).
+    pub fn point(&self, s: f64) -> PathPoint {
+        let local = (s - self.start).clamp(0.0, self.length);
+        self.shape.point(self.offset + local)
+    }
+}
+
+/// A programmed element waiting for its corners to be decided.
+#[derive(Debug, Clone)]
+pub struct Element {
+    /// The geometry.
+    pub segment: Segment,
+    /// Programmed feed (`None`: rapid).
+    pub feed: Option<f64>,
+    /// The block.
+    pub loc: SourceLoc,
+    /// Path tolerance active for this element.
+    pub tolerance: f64,
+    /// Length already used by the blend before it.
+    pub trim: f64,
+    /// Curvature vector at `trim` when that is a split point.
+    pub split: Option<[f64; 9]>,
+}
+
+/// What committing one element produced.
+#[derive(Debug, Default)]
+pub struct Committed {
+    /// New pieces in path order.
+    pub pieces: Vec<(Shape, f64, f64, Option<f64>, SourceLoc)>,
+    /// True when the path must stop where it ended before these pieces.
+    pub stop_first: bool,
+    /// True when the path must stop after all new pieces.
+    pub stop_at_end: bool,
+}
+
+/// Why a piece cannot be planned.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PieceError {
+    /// An axis that moves is not on the machine.
+    Absent(klar_interp::AxisLetter),
+    /// No positive finite limits.
+    Unplannable,
+}
+
+/// Path limits of a piece of `shape` with `length`, at feed `feed`.
+pub fn piece_limits(
+    shape: &Shape,
+    length: f64,
+    feed: Option<f64>,
+    limits: &[Option<AxisLimits>; 9],
+) -> Result<PathLimits, PieceError> {
+    let bounds = match shape {
+        Shape::Element(g) => g.bounds(),
+        Shape::Blend(q) => q.bounds(),
+    };
+    let l = path_limits(&bounds, length, limits, feed.map(|f| f * MAX_OVERRIDE)).map_err(
+        |e| match e {
+            LimitError::AbsentAxis(a) => PieceError::Absent(a),
+        },
+    )?;
+    let usable = |x: f64| x.is_finite() && x > 0.0;
+    if usable(l.velocity) && usable(l.acceleration) && usable(l.jerk) {
+        Ok(l)
+    } else {
+        Err(PieceError::Unplannable)
+    }
+}
+
+fn angle(a: &[f64; 9], b: &[f64; 9]) -> f64 {
+    let m = Metric::Linear;
+    let c = m.dot(a, b) / (m.norm(a) * m.norm(b)).max(f64::MIN_POSITIVE);
+    c.clamp(-1.0, 1.0).acos()
+}
+
+fn diff_norm(a: &[f64; 9], b: &[f64; 9]) -> f64 {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Commits the part of `cur` up to its next corner, and the blend at that corner.
+///
+/// `next` is the following element (None: `cur` is the last before a stop); `after` the
+/// one after it (to decide whether `next` becomes a split point). Updates `next`'s trim.
+pub fn commit(cur: &mut Element, next: Option<&mut Element>, after: Option<&Element>) -> Committed {
+    let mut out = Committed::default();
+    let len = cur.segment.length();
+    let Some(next) = next else {
+        push_part(&mut out, cur, cur.trim, len);
+        out.stop_at_end = true;
+        return out;
+    };
+    let end = cur.segment.point(len);
+    let start = next.segment.point(0.0);
+    let smooth = cur.segment.metric() == next.segment.metric()
+        && diff_norm(&end.d1, &start.d1) <= SMOOTH_TANGENT
+        && diff_norm(&end.d2, &start.d2) <= SMOOTH_CURVATURE;
+    if smooth && cur.split.is_none() {
+        push_part(&mut out, cur, cur.trim, len);
+        return out;
+    }
+    let tol = cur.tolerance.min(next.tolerance);
+    let blendable = tol > 0.0
+        && cur.segment.metric() == Metric::Linear
+        && next.segment.metric() == Metric::Linear;
+    if blendable {
+        if let Some(done) = try_corner(cur, next, after, tol) {
+            return done;
+        }
+        if cur.split.is_some() {
+            // The blend before ends at a split point whose curvature no blend here can take
+            // over: stop there, then treat the rest of the line as a plain element.
+            cur.split = None;
+            if let Some(mut done) = try_corner(cur, next, None, tol) {
+                done.stop_first = true;
+                return done;
+            }
+            out.stop_first = true;
+        }
+    }
+    cur.split = None;
+    push_part(&mut out, cur, cur.trim, len);
+    out.stop_at_end = true;
+    next.trim = 0.0;
+    next.split = None;
+    out
+}
+
+/// The element's own part from `from` to `to`, if it has length.
+fn push_part(out: &mut Committed, e: &Element, from: f64, to: f64) {
+    if to - from > 1e-12 {
+        out.pieces.push((
+            Shape::Element(e.segment.clone()),
+            from,
+            to - from,
+            e.feed,
+            e.loc,
+        ));
+    }
+}
+
+/// The curvature vector to give `mid` at its midpoint when it can become a split point
+/// between `prev` and `next`.
+fn split_curvature(prev: &Element, mid: &Element, next: &Element, tol: f64) -> Option<[f64; 9]> {
+    if !matches!(mid.segment, Segment::Line(_))
+        || mid.segment.metric() != Metric::Linear
+        || next.segment.metric() != Metric::Linear
+    {
+        return None;
+    }
+    let lp = prev.segment.length();
+    let lm = mid.segment.length();
+    let ln = next.segment.length();
+    let tp = prev.segment.point(lp).d1;
+    let tm = mid.segment.point(0.0).d1;
+    let tn = next.segment.point(0.0).d1;
+    let worst = angle(&tp, &tm).max(angle(&tm, &tn));
+    if worst > SPLIT_MAX_ANGLE || lm * worst > 2.0 * tol || tol.min(next.tolerance) <= 0.0 {
+        return None;
+    }
+    let ds = 0.5 * (lp.min(2.0 * lm) + 2.0 * lm + ln.min(2.0 * lm));
+    let mut k = [0.0; 9];
+    for (i, x) in k.iter_mut().enumerate() {
+        *x = (tn[i] - tp[i]) / ds;
+    }
+    let along = Metric::Linear.dot(&k, &tm);
+    for (x, t) in k.iter_mut().zip(&tm) {
+        *x -= along * t;
+    }
+    k.iter().all(|x| x.is_finite()).then_some(k)
+}
+
+/// Tries to blend the corner between `cur` and `next`; on success returns the pieces and
+/// sets `next`'s trim (and split point).
+fn try_corner(
+    cur: &Element,
+    next: &mut Element,
+    after: Option<&Element>,
+    tol: f64,
+) -> Option<Committed> {
+    let len = cur.segment.length();
+    let nlen = next.segment.length();
+    let mut right_split = after.and_then(|a| split_curvature(cur, next, a, tol));
+    let left_fixed = cur.split;
+    let t_end = cur.segment.point(len);
+    let t_start = next.segment.point(0.0);
+    let theta = angle(&t_end.d1, &t_start.d1);
+    let cap_left = (len - cur.trim).min(0.5 * len).max(0.0);
+    let cap_right = 0.5 * nlen;
+    // First guess from the corner angle (or the curvature jump of a tangent joint).
+    let guess = if theta > 1e-3 {
+        4.0 * tol / (0.5 * theta).sin()
+    } else {
+        let jump = diff_norm(&t_end.d2, &t_start.d2).max(1e-12);
+        (48.0 * tol / jump).sqrt()
+    };
+    let mut d = guess.min(cap_left.max(cap_right));
+    for _ in 0..BLEND_ATTEMPTS {
+        let dl = match left_fixed {
+            Some(_) => len - cur.trim,
+            None => d.min(cap_left),
+        };
+        let dr = match right_split {
+            Some(_) => cap_right,
+            None => d.min(cap_right),
+        };
+        if dl < MIN_BLEND && left_fixed.is_none() || dr < MIN_BLEND {
+            return None;
+        }
+        let mut a = cur.segment.point(len - dl);
+        if let Some(k) = left_fixed {
+            a.d2 = k;
+        }
+        let mut b = next.segment.point(dr);
+        if let Some(k) = right_split {
+            b.d2 = k;
+        }
+        let contour = [
+            ContourPart {
+                segment: &cur.segment,
+                from: len - dl,
+                to: len,
+            },
+            ContourPart {
+                segment: &next.segment,
+                from: 0.0,
+                to: dr,
+            },
+        ];
+        if let Some((curve, _)) = blend_within(&a, &b, &contour, tol) {
+            let mut out = Committed::default();
+            push_part(&mut out, cur, cur.trim, len - dl);
+            let length = curve.length();
+            let feed = match (cur.feed, next.feed) {
+                (Some(x), Some(y)) => Some(x.min(y)),
+                (x, y) => x.or(y),
+            };
+            out.pieces
+                .push((Shape::Blend(Box::new(curve)), 0.0, length, feed, next.loc));
+            next.trim = dr;
+            next.split = right_split;
+            return Some(out);
+        }
+        if right_split.is_some() {
+            right_split = None;
+        } else if left_fixed.is_some() && dr <= MIN_BLEND {
+            return None;
+        } else {
+            d = d.min(cap_left.max(cap_right)) * 0.6;
+        }
+    }
+    None
+}

@@ -1,0 +1,305 @@
+//! Jerk-limited speed profile along a path: the 7-phase S-curve from rest to rest.
+//!
+//! Phases: jerk +J, constant acceleration, jerk −J (acceleration phase), cruise, then the
+//! mirror image to stop. Short moves that cannot reach the cruise speed get a lower peak
+//! speed (and, if needed, a lower peak acceleration) so the distance is still exact.
+
+/// Path limits a profile must respect.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PathLimits {
+    /// Largest path speed (units/s).
+    pub velocity: f64,
+    /// Largest path acceleration (units/s²).
+    pub acceleration: f64,
+    /// Largest path jerk (units/s³).
+    pub jerk: f64,
+}
+
+/// Path distance, speed and acceleration at one instant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProfileState {
+    /// Distance from the start.
+    pub s: f64,
+    /// Path speed.
+    pub v: f64,
+    /// Path acceleration.
+    pub a: f64,
+}
+
+/// A symmetric rest-to-rest S-curve over a distance.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SCurve {
+    distance: f64,
+    /// Peak speed actually reached.
+    peak_velocity: f64,
+    /// Peak acceleration actually reached.
+    peak_acceleration: f64,
+    jerk: f64,
+    /// Duration of each jerk phase.
+    t_jerk: f64,
+    /// Duration of the constant-acceleration phase.
+    t_const: f64,
+    /// Duration of the cruise phase.
+    t_cruise: f64,
+}
+
+/// The acceleration phase to reach speed `v` from rest: (jerk time, constant-acceleration
+/// time, peak acceleration).
+fn ramp(v: f64, a: f64, j: f64) -> (f64, f64, f64) {
+    if v * j >= a * a {
+        (a / j, v / a - a / j, a)
+    } else {
+        let tj = (v / j).sqrt();
+        (tj, 0.0, j * tj)
+    }
+}
+
+impl SCurve {
+    /// The time-optimal symmetric S-curve covering `distance` within `limits`. All inputs
+    /// must be positive and finite (the planner checks them).
+    pub fn new(distance: f64, limits: PathLimits) -> SCurve {
+        let PathLimits {
+            velocity: vmax,
+            acceleration: a,
+            jerk: j,
+        } = limits;
+        // Distance of a full rest → v → rest profile without cruise: v · (acceleration time).
+        let stop_distance = |v: f64| {
+            let (tj, tc, _) = ramp(v, a, j);
+            v * (2.0 * tj + tc)
+        };
+        let v = if stop_distance(vmax) <= distance {
+            vmax
+        } else if distance >= 2.0 * a * a * a / (j * j) {
+            // Peak acceleration reached: v²/a + v·a/j = distance.
+            let b = a / j;
+            0.5 * a * (-b + (b * b + 4.0 * distance / a).sqrt())
+        } else {
+            // Triangular acceleration: 2·v^{3/2}/√j = distance.
+            (0.5 * distance * j.sqrt()).powf(2.0 / 3.0)
+        };
+        let v = v.min(vmax);
+        let (t_jerk, t_const, peak_acceleration) = ramp(v, a, j);
+        let t_cruise = ((distance - stop_distance(v)) / v).max(0.0);
+        SCurve {
+            distance,
+            peak_velocity: v,
+            peak_acceleration,
+            jerk: j,
+            t_jerk,
+            t_const,
+            t_cruise,
+        }
+    }
+
+    /// Total duration.
+    pub fn duration(&self) -> f64 {
+        2.0 * self.ramp_time() + self.t_cruise
+    }
+
+    /// Distance covered.
+    pub fn distance(&self) -> f64 {
+        self.distance
+    }
+
+    /// Peak path speed reached.
+    pub fn peak_velocity(&self) -> f64 {
+        self.peak_velocity
+    }
+
+    /// Peak path acceleration reached.
+    pub fn peak_acceleration(&self) -> f64 {
+        self.peak_acceleration
+    }
+
+    fn ramp_time(&self) -> f64 {
+        2.0 * self.t_jerk + self.t_const
+    }
+
+    /// State of the acceleration phase `tau` seconds after the start.
+    fn ramp_state(&self, tau: f64) -> ProfileState {
+        let (j, tj, tc, ap) = (self.jerk, self.t_jerk, self.t_const, self.peak_acceleration);
+        let tau = tau.clamp(0.0, self.ramp_time());
+        if tau <= tj {
+            return ProfileState {
+                s: j * tau.powi(3) / 6.0,
+                v: 0.5 * j * tau * tau,
+                a: j * tau,
+            };
+        }
+        let (s1, v1) = (j * tj.powi(3) / 6.0, 0.5 * j * tj * tj);
+        if tau <= tj + tc {
+            let d = tau - tj;
+            return ProfileState {
+                s: s1 + v1 * d + 0.5 * ap * d * d,
+                v: v1 + ap * d,
+                a: ap,
+            };
+        }
+        let (s2, v2) = (s1 + v1 * tc + 0.5 * ap * tc * tc, v1 + ap * tc);
+        let d = tau - tj - tc;
+        ProfileState {
+            s: s2 + v2 * d + 0.5 * ap * d * d - j * d.powi(3) / 6.0,
+            v: v2 + ap * d - 0.5 * j * d * d,
+            a: ap - j * d,
+        }
+    }
+
+    /// State `t` seconds after the start (clamped to the profile): exactly the distance at
+    /// and after the end.
+    pub fn state(&self, t: f64) -> ProfileState {
+        let ramp = self.ramp_time();
+        let total = self.duration();
+        if t >= total {
+            return ProfileState {
+                s: self.distance,
+                v: 0.0,
+                a: 0.0,
+            };
+        }
+        if t <= ramp {
+            return self.ramp_state(t);
+        }
+        if t <= ramp + self.t_cruise {
+            let up = self.ramp_state(ramp);
+            return ProfileState {
+                s: up.s + self.peak_velocity * (t - ramp),
+                v: self.peak_velocity,
+                a: 0.0,
+            };
+        }
+        // Braking is the acceleration phase mirrored in time and distance.
+        let m = self.ramp_state(total - t);
+        ProfileState {
+            s: (self.distance - m.s).clamp(0.0, self.distance),
+            v: m.v,
+            a: -m.a,
+        }
+    }
+}
+
+/// Path distance, speed, acceleration and jerk at one instant of a [`Ramp`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RampState {
+    /// Distance from where the ramp started.
+    pub s: f64,
+    /// Path speed.
+    pub v: f64,
+    /// Path acceleration.
+    pub a: f64,
+}
+
+/// The time-optimal jerk-limited change of path speed from any state `(v₀, a₀)` to a target
+/// speed `w` with zero acceleration: at most three phases of constant jerk (±J, 0, ±J) with
+/// |a| ≤ A in between, then cruise at `w` for ever.
+///
+/// Whether it speeds up or slows down follows from the speed reached by bringing the
+/// acceleration to zero at once, `v₀ + a₀·|a₀|/(2J)`: below `w` it speeds up, above it slows
+/// down. An acceleration above A (limits that dropped) is first brought back to A.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ramp {
+    v0: f64,
+    a0: f64,
+    target: f64,
+    /// (jerk, duration) of the three phases.
+    phases: [(f64, f64); 3],
+}
+
+impl Ramp {
+    /// The ramp from speed `v0` and acceleration `a0` to speed `target`, with path
+    /// acceleration limit `accel` and jerk limit `jerk` (both positive and finite).
+    pub fn new(v0: f64, a0: f64, target: f64, accel: f64, jerk: f64) -> Ramp {
+        let zeroed = v0 + a0 * a0.abs() / (2.0 * jerk);
+        let phases = if target >= zeroed {
+            speed_up(target - v0, a0, accel, jerk)
+        } else {
+            speed_up(v0 - target, -a0, accel, jerk).map(|(j, t)| (-j, t))
+        };
+        Ramp {
+            v0,
+            a0,
+            target,
+            phases,
+        }
+    }
+
+    /// Time until the target speed is reached.
+    pub fn duration(&self) -> f64 {
+        self.phases.iter().map(|p| p.1).sum()
+    }
+
+    /// The target speed.
+    pub fn target(&self) -> f64 {
+        self.target
+    }
+
+    /// Distance covered until the target speed is reached.
+    pub fn distance(&self) -> f64 {
+        self.state(self.duration()).s
+    }
+
+    /// The jerk applied at time `t` (zero after the ramp).
+    pub fn jerk_at(&self, t: f64) -> f64 {
+        let mut t0 = 0.0;
+        for &(j, d) in &self.phases {
+            if t < t0 + d {
+                return j;
+            }
+            t0 += d;
+        }
+        0.0
+    }
+
+    /// State `t ≥ 0` seconds after the start; cruise at the target after the ramp.
+    pub fn state(&self, t: f64) -> RampState {
+        let (mut s, mut v, mut a) = (0.0, self.v0, self.a0);
+        let mut left = t.max(0.0);
+        for &(j, d) in &self.phases {
+            let h = left.min(d);
+            if h <= 0.0 {
+                continue;
+            }
+            s += v * h + 0.5 * a * h * h + j * h * h * h / 6.0;
+            v += a * h + 0.5 * j * h * h;
+            a += j * h;
+            left -= h;
+        }
+        let total = self.duration();
+        if t >= total {
+            s += self.target * (t - total);
+            v = self.target;
+            a = 0.0;
+        }
+        RampState { s, v, a }
+    }
+}
+
+/// Phases raising the speed by `dv` from acceleration `a0`, where `dv ≥ a0·|a0|/(2J)`.
+fn speed_up(dv: f64, a0: f64, accel: f64, jerk: f64) -> [(f64, f64); 3] {
+    let dv = dv.max(a0 * a0.abs() / (2.0 * jerk));
+    if a0 > accel {
+        // Bring the acceleration back to the limit, hold it, then to zero.
+        let hold = ((dv - a0 * a0 / (2.0 * jerk)) / accel).max(0.0);
+        return [
+            (-jerk, (a0 - accel) / jerk),
+            (0.0, hold),
+            (-jerk, accel / jerk),
+        ];
+    }
+    // Peak acceleration without a hold: (2·ap² − a0²)/(2J) = dv.
+    let peak = ((2.0 * jerk * dv + a0 * a0) / 2.0).max(0.0).sqrt();
+    if peak <= accel {
+        [
+            (jerk, ((peak - a0) / jerk).max(0.0)),
+            (0.0, 0.0),
+            (-jerk, peak / jerk),
+        ]
+    } else {
+        let hold = ((dv - (2.0 * accel * accel - a0 * a0) / (2.0 * jerk)) / accel).max(0.0);
+        [
+            (jerk, ((accel - a0) / jerk).max(0.0)),
+            (0.0, hold),
+            (-jerk, accel / jerk),
+        ]
+    }
+}

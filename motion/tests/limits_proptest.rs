@@ -1,0 +1,189 @@
+//! Property test: random lines, arcs, helices and splines with random axis limits and feeds never
+//! drive an axis past its velocity, acceleration or jerk limit (finite differences of the
+//! sampled positions, 1 % slack), never exceed the feed, and end exactly.
+
+mod common;
+
+use common::*;
+use klar_interp::op::SplineAxis;
+use klar_interp::{AxisLetter, Feed, Op, OpKind, Plane, Pose};
+use klar_motion::AxisLimits;
+use proptest::prelude::*;
+
+/// One random move, described independently of the planner.
+#[derive(Debug, Clone)]
+enum Move {
+    Line {
+        to: [f64; 3],
+        feed: Option<f64>,
+    },
+    Arc {
+        plane: usize,
+        radius: f64,
+        sweep: f64,
+        rise: f64,
+        feed: f64,
+    },
+    Spline {
+        /// Chord from start to end.
+        chord: [f64; 3],
+        /// K3 and K2 per axis; K1 follows from the start point.
+        k: [[f64; 2]; 3],
+        feed: f64,
+    },
+}
+
+fn move_strategy() -> impl Strategy<Value = Move> {
+    prop_oneof![
+        (
+            prop::array::uniform3(-60.0f64..60.0),
+            prop::option::weighted(0.8, 5.0f64..150.0)
+        )
+            .prop_map(|(to, feed)| Move::Line { to, feed }),
+        (
+            0usize..3,
+            0.5f64..30.0,
+            -720.0f64..720.0,
+            -10.0f64..10.0,
+            5.0f64..150.0
+        )
+            .prop_map(|(plane, radius, sweep, rise, feed)| Move::Arc {
+                plane,
+                radius,
+                sweep,
+                rise,
+                feed,
+            }),
+        (
+            prop::array::uniform3(-1.0f64..1.0),
+            20.0f64..60.0,
+            prop::array::uniform3(prop::array::uniform2(-3.0f64..3.0)),
+            5.0f64..150.0
+        )
+            .prop_filter("chord direction must be defined", |(d, ..)| {
+                d.iter().map(|x| x * x).sum::<f64>() > 0.01
+            })
+            .prop_map(|(d, len, k, feed)| {
+                // Chord of length ≥ 20 against |K3|, |K2| ≤ 3: the parameter speed
+                // |dP/du| ≥ |chord| − 2|K3| − |K2| stays far from zero (no cusp).
+                let n = d.iter().map(|x| x * x).sum::<f64>().sqrt();
+                Move::Spline {
+                    chord: d.map(|x| x / n * len),
+                    k,
+                    feed,
+                }
+            }),
+    ]
+}
+
+fn limits_strategy() -> impl Strategy<Value = AxisLimits> {
+    (20.0f64..400.0, 200.0f64..5000.0, 2000.0f64..200_000.0).prop_map(|(v, a, j)| AxisLimits {
+        max_velocity: v,
+        max_acceleration: a,
+        max_jerk: j,
+    })
+}
+
+/// Turns the random moves into ops; arcs start where the tool is, with the centre placed
+/// `radius` away at a fixed angle.
+fn build(moves: &[Move]) -> (Vec<Op>, Vec<Option<f64>>, Pose) {
+    let mut p = Pose::xyz(1.0, 2.0, 3.0);
+    let mut ops = Vec::new();
+    let mut feeds = Vec::new();
+    for (k, m) in moves.iter().enumerate() {
+        let n = k as u32 + 1;
+        match *m {
+            Move::Line { to, feed } => {
+                let q = Pose::xyz(to[0], to[1], to[2]);
+                ops.push(line(n, p, q, feed.map_or(Feed::Rapid, Feed::Rate)));
+                feeds.push(feed);
+                p = q;
+            }
+            Move::Arc {
+                plane,
+                radius,
+                sweep,
+                rise,
+                feed,
+            } => {
+                let (plane, a, b, c) = match plane {
+                    0 => (Plane::XY, 0, 1, 2),
+                    1 => (Plane::ZX, 2, 0, 1),
+                    _ => (Plane::YZ, 1, 2, 0),
+                };
+                let phi0: f64 = 0.7;
+                let center = [p.0[a] - radius * phi0.cos(), p.0[b] - radius * phi0.sin()];
+                let phi1 = phi0 + sweep.to_radians();
+                let mut q = p;
+                q.0[a] = center[0] + radius * phi1.cos();
+                q.0[b] = center[1] + radius * phi1.sin();
+                q.0[c] += rise;
+                ops.push(arc(n, p, q, center, plane, sweep, Feed::Rate(feed)));
+                feeds.push(Some(feed));
+                p = q;
+            }
+            Move::Spline { chord, k, feed } => {
+                let mut q = p;
+                let mut axes = Vec::new();
+                for (i, letter) in [AxisLetter::X, AxisLetter::Y, AxisLetter::Z]
+                    .into_iter()
+                    .enumerate()
+                {
+                    q.0[i] = p.0[i] + chord[i];
+                    // Start = end + K3 + K2 + K1.
+                    let k1 = p.0[i] - q.0[i] - k[i][0] - k[i][1];
+                    axes.push(SplineAxis {
+                        axis: letter,
+                        k: [k[i][0], k[i][1], k1],
+                    });
+                }
+                ops.push(op(
+                    n,
+                    OpKind::Spline {
+                        from: p,
+                        to: q,
+                        axes,
+                        feed: Feed::Rate(feed),
+                    },
+                ));
+                feeds.push(Some(feed));
+                p = q;
+            }
+        }
+    }
+    (ops, feeds, p)
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(96))]
+
+    #[test]
+    fn random_moves_respect_every_limit(
+        moves in prop::collection::vec(move_strategy(), 1..4),
+        lx in limits_strategy(),
+        ly in limits_strategy(),
+        lz in limits_strategy(),
+    ) {
+        let mut limits = [None; 9];
+        limits[0] = Some(lx);
+        limits[1] = Some(ly);
+        limits[2] = Some(lz);
+        let cfg = config(limits);
+        let start = Pose::xyz(1.0, 2.0, 3.0);
+        let (ops, feeds, end) = build(&moves);
+        let r = run(cfg.clone(), start, ops);
+        assert_within_limits(&cfg, &start, &r.samples, 1.01);
+        for s in &r.samples {
+            let idx = s.loc.line as usize - 1;
+            if let Some(Some(f)) = feeds.get(idx) {
+                let v = (s.velocity[0].powi(2) + s.velocity[1].powi(2) + s.velocity[2].powi(2)).sqrt();
+                prop_assert!(v <= f * (1.0 + 1e-9), "speed {} above feed {}", v, f);
+            }
+        }
+        if let Some(last) = r.samples.last() {
+            for i in 0..3 {
+                prop_assert!((last.pose.0[i] - end.0[i]).abs() <= 1e-9);
+            }
+        }
+    }
+}

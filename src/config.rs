@@ -1,0 +1,327 @@
+//! The machine description: axes, limits, servo period, tolerance, backends and spindle,
+//! read from TOML. Unknown keys are errors. [`MachineConfig::builtin_mill`] is the machine
+//! `klar run` uses when no `--machine` file is given.
+//!
+//! Units: positions in mm (linear) or degrees (rotary), velocities per second, accelerations
+//! per second², jerks per second³, periods in seconds.
+
+use klar_interp::AxisLetter;
+use klar_drivers::modbus::ModbusVfdConfig;
+use klar_motion::AxisLimits;
+use klar_sim::plant::SimAxisParams;
+use serde::Deserialize;
+use std::path::Path;
+
+/// Linear or rotary.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum AxisKind {
+    /// Moves in mm.
+    Linear,
+    /// Turns in degrees.
+    Rotary,
+}
+
+/// Which backend drives an axis.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum BackendConfig {
+    /// A simulated servo axis (klar-sim).
+    Sim(SimAxisParams),
+}
+
+impl Default for BackendConfig {
+    fn default() -> Self {
+        BackendConfig::Sim(SimAxisParams::default())
+    }
+}
+
+/// One machine axis.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AxisConfig {
+    /// Axis letter as programs name it.
+    pub letter: AxisLetter,
+    /// Linear or rotary.
+    pub kind: AxisKind,
+    /// Soft limits `[min, max]`.
+    pub travel: [f64; 2],
+    /// Maximum velocity (mm/s or °/s).
+    pub max_velocity: f64,
+    /// Maximum acceleration (mm/s² or °/s²).
+    pub max_acceleration: f64,
+    /// Maximum jerk (mm/s³ or °/s³).
+    pub max_jerk: f64,
+    /// Position at start of a simulated run (defaults to 0).
+    #[serde(default)]
+    pub start: f64,
+    /// The backend.
+    #[serde(default)]
+    pub backend: BackendConfig,
+}
+
+/// How program coordinates map to machine axes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum KinematicsConfig {
+    /// Each machine axis is the program axis of the same letter.
+    #[default]
+    Cartesian,
+}
+
+/// A spindle motor simulated inside klar: its speed ramps at `acceleration`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SimSpindleConfig {
+    /// Ramp rate, rpm per second.
+    #[serde(default = "default_spindle_acceleration")]
+    pub acceleration: f64,
+    /// At-speed window as a fraction of the command.
+    #[serde(default = "default_at_speed_fraction")]
+    pub at_speed_fraction: f64,
+}
+
+fn default_spindle_acceleration() -> f64 {
+    8000.0
+}
+fn default_at_speed_fraction() -> f64 {
+    0.02
+}
+fn default_at_speed_timeout() -> f64 {
+    10.0
+}
+
+impl Default for SimSpindleConfig {
+    fn default() -> Self {
+        Self {
+            acceleration: default_spindle_acceleration(),
+            at_speed_fraction: default_at_speed_fraction(),
+        }
+    }
+}
+
+/// A spindle VFD on Modbus RTU, optionally simulated on a pseudo-terminal.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModbusSpindleConfig {
+    /// The VFD: serial line, unit, register map (see docs/modbus.md).
+    pub vfd: ModbusVfdConfig,
+    /// When present, klar starts a simulated VFD with the same register map on a
+    /// pseudo-terminal and talks to it instead of `vfd.serial.port` (no hardware needed).
+    #[serde(default)]
+    pub simulate: Option<SimSpindleConfig>,
+}
+
+/// Which backend drives the spindle.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum SpindleBackendConfig {
+    /// Simulated spindle motor.
+    Sim(SimSpindleConfig),
+    /// Modbus RTU VFD.
+    Modbus(ModbusSpindleConfig),
+}
+
+impl Default for SpindleBackendConfig {
+    fn default() -> Self {
+        SpindleBackendConfig::Sim(SimSpindleConfig::default())
+    }
+}
+
+/// The spindle.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SpindleConfig {
+    /// Highest speed in rpm.
+    pub max_rpm: f64,
+    /// How long a spindle command may take to reach speed before the run stops, s.
+    #[serde(default = "default_at_speed_timeout")]
+    pub at_speed_timeout: f64,
+    /// The backend.
+    #[serde(default)]
+    pub backend: SpindleBackendConfig,
+}
+
+/// A whole machine.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MachineConfig {
+    /// A name for reports.
+    pub name: String,
+    /// Servo period in seconds.
+    pub servo_period: f64,
+    /// Default path tolerance in mm.
+    pub tolerance: f64,
+    /// Kinematics.
+    #[serde(default)]
+    pub kinematics: KinematicsConfig,
+    /// The axes, in machine order (trace columns follow this order).
+    #[serde(rename = "axis")]
+    pub axes: Vec<AxisConfig>,
+    /// The spindle, if any.
+    #[serde(default)]
+    pub spindle: Option<SpindleConfig>,
+    /// Simulation only: axes start referenced, no homing needed.
+    #[serde(default)]
+    pub start_homed: bool,
+}
+
+/// What can be wrong with a machine file.
+#[derive(Debug, thiserror::Error)]
+pub enum ConfigError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Io {
+        /// File name.
+        path: String,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax or schema error (with line and column from the TOML parser).
+    #[error("{path}: {message}")]
+    Parse {
+        /// File name.
+        path: String,
+        /// What the parser said.
+        message: String,
+    },
+    /// A value that parses but makes no sense.
+    #[error("{path}: {message}")]
+    Invalid {
+        /// File name.
+        path: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+/// The built-in simulated 3-axis mill as TOML (also the reference example of the format).
+pub const BUILTIN_MILL: &str = include_str!("../machines/mill.toml");
+
+impl MachineConfig {
+    /// Reads and validates a machine file.
+    pub fn load(path: &Path) -> Result<Self, ConfigError> {
+        let shown = path.display().to_string();
+        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+            path: shown.clone(),
+            source,
+        })?;
+        Self::parse(&shown, &text)
+    }
+
+    /// Parses and validates machine TOML; `name` is used in messages.
+    pub fn parse(name: &str, text: &str) -> Result<Self, ConfigError> {
+        let config: MachineConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
+            path: name.to_string(),
+            message: e.to_string().trim_end().to_string(),
+        })?;
+        config.validate().map_err(|message| ConfigError::Invalid {
+            path: name.to_string(),
+            message,
+        })?;
+        Ok(config)
+    }
+
+    /// The built-in simulated mill.
+    pub fn builtin_mill() -> Self {
+        match Self::parse("built-in mill", BUILTIN_MILL) {
+            Ok(c) => c,
+            // The built-in file is part of the binary and covered by a test.
+            Err(e) => unreachable!("built-in machine is invalid: {e}"),
+        }
+    }
+
+    fn validate(&self) -> Result<(), String> {
+        let positive = |what: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{what} must be a positive number, got {v}"))
+            }
+        };
+        positive("servo_period", self.servo_period)?;
+        if self.servo_period > 0.1 {
+            return Err(format!(
+                "servo_period {} s is longer than 0.1 s",
+                self.servo_period
+            ));
+        }
+        positive("tolerance", self.tolerance)?;
+        if self.axes.is_empty() {
+            return Err("a machine needs at least one [[axis]]".into());
+        }
+        for (i, a) in self.axes.iter().enumerate() {
+            let l = a.letter;
+            if self.axes[..i].iter().any(|b| b.letter == l) {
+                return Err(format!("axis {l} is defined twice"));
+            }
+            if a.letter.is_rotary() != (a.kind == AxisKind::Rotary) {
+                return Err(format!(
+                    "axis {l}: kind {:?} does not fit the letter (A, B, C are rotary)",
+                    a.kind
+                ));
+            }
+            positive(&format!("axis {l}: max_velocity"), a.max_velocity)?;
+            positive(&format!("axis {l}: max_acceleration"), a.max_acceleration)?;
+            positive(&format!("axis {l}: max_jerk"), a.max_jerk)?;
+            let [lo, hi] = a.travel;
+            if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+                return Err(format!("axis {l}: travel [{lo}, {hi}] must have min < max"));
+            }
+            if !(a.start >= lo && a.start <= hi) {
+                return Err(format!(
+                    "axis {l}: start {} is outside travel [{lo}, {hi}]",
+                    a.start
+                ));
+            }
+        }
+        if let Some(s) = &self.spindle {
+            positive("spindle.max_rpm", s.max_rpm)?;
+            positive("spindle.at_speed_timeout", s.at_speed_timeout)?;
+            let sim = match &s.backend {
+                SpindleBackendConfig::Sim(sim) => Some(sim),
+                SpindleBackendConfig::Modbus(m) => {
+                    if m.vfd.max_rpm < s.max_rpm {
+                        return Err(format!(
+                            "spindle.max_rpm {} is above the VFD's max_rpm {}",
+                            s.max_rpm, m.vfd.max_rpm
+                        ));
+                    }
+                    m.simulate.as_ref()
+                }
+            };
+            if let Some(sim) = sim {
+                positive("spindle simulation acceleration", sim.acceleration)?;
+                positive("spindle simulation at_speed_fraction", sim.at_speed_fraction)?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Planner limits per program axis (None for axes this machine lacks).
+    pub fn axis_limits(&self) -> [Option<AxisLimits>; 9] {
+        let mut out = [None; 9];
+        for a in &self.axes {
+            out[a.letter.index()] = Some(AxisLimits {
+                max_velocity: a.max_velocity,
+                max_acceleration: a.max_acceleration,
+                max_jerk: a.max_jerk,
+            });
+        }
+        out
+    }
+
+    /// True when a backend runs on the wall clock (a bus, a serial line, a device simulated
+    /// in its own thread): such a machine can only run with `--realtime`.
+    pub fn needs_wall_clock(&self) -> bool {
+        matches!(
+            self.spindle.as_ref().map(|s| &s.backend),
+            Some(SpindleBackendConfig::Modbus(_))
+        )
+    }
+
+    /// The axis letters in machine order.
+    pub fn letters(&self) -> Vec<AxisLetter> {
+        self.axes.iter().map(|a| a.letter).collect()
+    }
+}

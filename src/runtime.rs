@@ -1,0 +1,433 @@
+//! The runtime: wires interpreter → planner → kinematics → backends for one program run,
+//! streams the trace, watches the feedback and reports.
+//!
+//! Error handling follows the program contract: a syntax error anywhere refuses the run before
+//! any axis moves; an error that shows only when a block is reached (geometry, a computed value,
+//! travel) lets the motion of the previous blocks finish — a controlled stop at the end of the
+//! previous block — and then reports the diagnostic. An axis fault stops the run at once: the
+//! commanded position is held and the axes are disabled (the path-keeping stop on faults
+//! belongs to the look-ahead planner).
+//!
+//! Spindle commands reach the spindle backend when their block is reached; after a command to
+//! turn, the run holds position until the spindle reports at-speed, for at most the machine's
+//! `at_speed_timeout`.
+
+use crate::config::MachineConfig;
+use crate::machine::{MachineError, MachineIo};
+use crate::trace::TraceWriter;
+use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
+use klar_interp::{AxisLetter, Diagnostic, Interpreter, Op, OpKind, SourceLoc};
+use klar_motion::kinematics::{Cartesian, Kinematics};
+use klar_motion::{
+    AxisFault, BackendError, MotionError, Planner, PlannerConfig, Sample, Setpoint, Step,
+};
+use std::io::Write;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+/// How to run.
+pub struct RunOptions<'a> {
+    /// Run the servo loop on the wall clock instead of as fast as possible.
+    pub realtime: bool,
+    /// Where to write the trace CSV, if anywhere.
+    pub trace: Option<&'a mut dyn Write>,
+}
+
+/// What a finished (or stopped) run measured.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct RunReport {
+    /// Machine time of the program in seconds (simulated, not wall time).
+    pub machine_time: f64,
+    /// Blocks the interpreter executed.
+    pub blocks: u64,
+    /// Servo cycles run.
+    pub cycles: u64,
+    /// Largest |following error| per machine axis.
+    pub max_following_error: Vec<(AxisLetter, f64)>,
+    /// Realtime mode: cycles that started later than one servo period behind schedule.
+    pub underruns: u64,
+    /// Seconds spent waiting for the spindle to reach speed.
+    pub spindle_wait: f64,
+    /// True when the run used the wall clock.
+    pub realtime: bool,
+}
+
+/// Why a run did not complete.
+#[derive(Debug, thiserror::Error)]
+pub enum RunError {
+    /// Syntax errors: nothing moved.
+    #[error("the program has {} error(s); nothing moved", .0.len())]
+    Syntax(Vec<Diagnostic>),
+    /// A run-time program error: motion stopped at the end of the previous block.
+    #[error("{0}")]
+    Program(Diagnostic),
+    /// The planner refused an op.
+    #[error("{0}")]
+    Motion(#[from] MotionError),
+    /// An axis faulted.
+    #[error("axis {axis}: {fault} (at line {line})")]
+    Fault {
+        /// The axis.
+        axis: AxisLetter,
+        /// What it reported.
+        fault: AxisFault,
+        /// Program line being executed.
+        line: u32,
+    },
+    /// The spindle faulted or did not reach speed.
+    #[error("spindle: {message} (at line {line})")]
+    Spindle {
+        /// What happened.
+        message: String,
+        /// Program line being executed.
+        line: u32,
+    },
+    /// The machine's backends could not be opened.
+    #[error("{0}")]
+    Machine(#[from] MachineError),
+    /// The backend failed.
+    #[error("backend: {0}")]
+    Backend(#[from] BackendError),
+    /// Writing the trace failed.
+    #[error("trace: {0}")]
+    Trace(#[from] std::io::Error),
+}
+
+/// A run that ended early: the error plus what was measured until then.
+#[derive(Debug)]
+pub struct RunFailure {
+    /// Why it stopped.
+    pub error: RunError,
+    /// Figures up to the stop.
+    pub report: RunReport,
+}
+
+/// The state of one run between servo cycles.
+struct Session<'a, 'w> {
+    path: &'a Path,
+    config: &'a MachineConfig,
+    letters: Vec<AxisLetter>,
+    travel: Vec<[f64; 2]>,
+    kin: Cartesian,
+    io: MachineIo,
+    trace: Option<TraceWriter<&'w mut dyn Write>>,
+    report: RunReport,
+    wall_start: Instant,
+    /// Machine time of the last cycle.
+    t: f64,
+    /// Machine time minus planner time: grows while the run waits (spindle).
+    shift: f64,
+    /// Program line of the last sample (for reports).
+    line: u32,
+    commanded: Vec<f64>,
+    actual: Vec<f64>,
+    warned_no_spindle: bool,
+}
+
+impl Session<'_, '_> {
+    /// One servo cycle at machine time `t` with the setpoints already in `io`.
+    fn servo_cycle(&mut self, t: f64) -> Result<(), RunError> {
+        if self.report.realtime {
+            let due = self.wall_start + Duration::from_secs_f64(t);
+            let now = Instant::now();
+            if now < due {
+                std::thread::sleep(due - now);
+            } else if now - due > Duration::from_secs_f64(self.config.servo_period) {
+                self.report.underruns += 1;
+            }
+        }
+        self.io.cycle(t)?;
+        self.t = t;
+        self.report.cycles += 1;
+        self.report.machine_time = t;
+        for (i, f) in self.io.feedback().iter().enumerate() {
+            self.actual[i] = f.position;
+            let fe = f.following_error.abs();
+            if fe > self.report.max_following_error[i].1 {
+                self.report.max_following_error[i].1 = fe;
+            }
+            if let Some(fault) = &f.fault {
+                return Err(RunError::Fault {
+                    axis: self.letters[i],
+                    fault: fault.clone(),
+                    line: self.line,
+                });
+            }
+        }
+        if let Some(s) = self.io.spindle_mut()
+            && let Some(fault) = &s.feedback().fault
+        {
+            return Err(RunError::Spindle {
+                message: fault.to_string(),
+                line: self.line,
+            });
+        }
+        if let Some(tr) = self.trace.as_mut() {
+            tr.row(t, &self.commanded, &self.actual)?;
+        }
+        Ok(())
+    }
+
+    /// Sends one planner sample to the axes.
+    fn apply_sample(&mut self, sample: &Sample) -> Result<(), RunError> {
+        self.line = sample.loc.line;
+        self.kin.to_machine(&sample.pose, &mut self.commanded);
+        for (i, sp) in self.io.setpoints_mut().iter_mut().enumerate() {
+            let l = self.letters[i];
+            *sp = Setpoint {
+                position: self.commanded[i],
+                velocity: sample.velocity[l.index()],
+                acceleration: sample.acceleration[l.index()],
+            };
+        }
+        self.servo_cycle(sample.t + self.shift)
+    }
+
+    /// One cycle holding the last commanded position; planner time stands still.
+    fn hold_cycle(&mut self) -> Result<(), RunError> {
+        self.io.hold();
+        let period = self.config.servo_period;
+        self.shift += period;
+        self.servo_cycle(self.t + period)
+    }
+
+    /// A non-motion op reaching the servo loop.
+    fn handle_event(&mut self, op: &Op) -> Result<(), RunError> {
+        match &op.kind {
+            OpKind::Spindle {
+                spindle: SpindleId::Main,
+                dir,
+                speed,
+            } => self.spindle_command(op.loc, *dir, *speed),
+            OpKind::Stop { optional } => {
+                // A run without an operator cannot wait for a restart: it logs and goes on.
+                tracing::info!(
+                    line = op.loc.line,
+                    optional,
+                    "program stop (no operator: continuing)"
+                );
+                Ok(())
+            }
+            other => {
+                tracing::debug!(line = op.loc.line, ?other, "event");
+                Ok(())
+            }
+        }
+    }
+
+    fn diagnostic(&self, loc: SourceLoc, message: String) -> RunError {
+        let message = match loc.block {
+            Some(n) => format!("block {n}: {message}"),
+            None => message,
+        };
+        RunError::Program(Diagnostic {
+            file: self.path.to_path_buf(),
+            line: loc.line,
+            col: loc.col,
+            block: loc.block,
+            message,
+        })
+    }
+
+    fn spindle_command(
+        &mut self,
+        loc: SourceLoc,
+        dir: SpindleDir,
+        speed: SpindleSpeed,
+    ) -> Result<(), RunError> {
+        let rpm = match speed {
+            SpindleSpeed::Rpm(r) => r,
+            SpindleSpeed::SurfaceSpeed(_) => {
+                return Err(self.diagnostic(
+                    loc,
+                    "constant surface speed needs a lathe".to_string(),
+                ));
+            }
+        };
+        let signed = match dir {
+            SpindleDir::Cw => rpm,
+            SpindleDir::Ccw => -rpm,
+            SpindleDir::Off => 0.0,
+        };
+        let Some(spindle) = self.io.spindle_mut() else {
+            if signed != 0.0 && !self.warned_no_spindle {
+                tracing::warn!(line = loc.line, "this machine has no spindle: S/M3/M4 ignored");
+                self.warned_no_spindle = true;
+            }
+            return Ok(());
+        };
+        if signed.abs() > spindle.max_rpm {
+            let max = spindle.max_rpm;
+            return Err(self.diagnostic(
+                loc,
+                format!("spindle speed S{rpm} is above this machine's {max} rpm"),
+            ));
+        }
+        if signed == spindle.commanded() {
+            return Ok(());
+        }
+        spindle.command(signed)?;
+        let timeout = spindle.at_speed_timeout;
+        if signed == 0.0 {
+            return Ok(());
+        }
+        let waited_from = self.t;
+        loop {
+            self.hold_cycle()?;
+            let at_speed = self
+                .io
+                .spindle_mut()
+                .is_some_and(|s| s.feedback().at_speed);
+            if at_speed {
+                break;
+            }
+            if self.t - waited_from > timeout {
+                return Err(RunError::Spindle {
+                    message: format!("did not reach {signed} rpm within {timeout} s"),
+                    line: loc.line,
+                });
+            }
+        }
+        self.report.spindle_wait += self.t - waited_from;
+        Ok(())
+    }
+}
+
+/// Runs a program on a machine to its end.
+pub fn run_program(
+    path: &Path,
+    config: &MachineConfig,
+    options: RunOptions<'_>,
+) -> Result<RunReport, Box<RunFailure>> {
+    let letters = config.letters();
+    let report = RunReport {
+        max_following_error: letters.iter().map(|&l| (l, 0.0)).collect(),
+        realtime: options.realtime || config.needs_wall_clock(),
+        ..RunReport::default()
+    };
+    let fail = |error: RunError, report: &RunReport| {
+        Box::new(RunFailure {
+            error,
+            report: report.clone(),
+        })
+    };
+
+    if let Err(diags) = klar_interp::syntax_check(path) {
+        return Err(fail(RunError::Syntax(diags), &report));
+    }
+
+    let kin = Cartesian::new(&letters);
+    let io = MachineIo::open(config).map_err(|e| fail(e.into(), &report))?;
+    let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
+    let mut interp =
+        Interpreter::open(path, start).map_err(|d| fail(RunError::Program(d), &report))?;
+    let planner_config = PlannerConfig {
+        limits: config.axis_limits(),
+        period: config.servo_period,
+        tolerance: config.tolerance,
+    };
+    let mut planner =
+        Planner::new(planner_config, start).map_err(|e| fail(RunError::Motion(e), &report))?;
+    let trace = match options.trace {
+        Some(w) => Some(TraceWriter::new(w, &letters).map_err(|e| fail(e.into(), &report))?),
+        None => None,
+    };
+    let n = letters.len();
+    let mut session = Session {
+        path,
+        config,
+        travel: config.axes.iter().map(|a| a.travel).collect(),
+        kin,
+        io,
+        trace,
+        report,
+        wall_start: Instant::now(),
+        t: 0.0,
+        shift: 0.0,
+        line: 0,
+        commanded: config.axes.iter().map(|a| a.start).collect(),
+        actual: vec![0.0; n],
+        warned_no_spindle: false,
+        letters,
+    };
+
+    let enabled = session.io.enable();
+    let mut pending_error: Option<RunError> = None;
+    let outcome: Result<(), RunError> = enabled.map_err(RunError::from).and_then(|()| {
+        let mut input_done = false;
+        loop {
+            while !input_done && planner.needs_input() {
+                let next = match interp.next() {
+                    Some(Ok(op)) => check_travel(&op, &session.letters, &session.travel, path)
+                        .map_err(RunError::Program)
+                        .and_then(|()| planner.push(op).map_err(RunError::Motion)),
+                    Some(Err(d)) => Err(RunError::Program(d)),
+                    None => {
+                        planner.finish();
+                        input_done = true;
+                        Ok(())
+                    }
+                };
+                if let Err(e) = next {
+                    // Let the motion of the blocks before finish, then report.
+                    pending_error = Some(e);
+                    planner.finish();
+                    input_done = true;
+                }
+            }
+            match planner.next_step() {
+                None => break,
+                Some(Step::Sample(sample)) => session.apply_sample(&sample)?,
+                Some(Step::Event(op)) => session.handle_event(&op)?,
+            }
+        }
+        Ok(())
+    });
+    session.report.blocks = interp.blocks_executed();
+    let disabled = session.io.disable();
+    let mut report = session.report;
+    let trace_done = match session.trace {
+        Some(t) => t.finish(),
+        None => Ok(()),
+    };
+    report.realtime = report.realtime || options.realtime;
+    match (outcome, pending_error) {
+        (Err(e), _) | (Ok(()), Some(e)) => Err(fail(e, &report)),
+        (Ok(()), None) => {
+            disabled.map_err(|e| fail(e.into(), &report))?;
+            trace_done.map_err(|e| fail(e.into(), &report))?;
+            Ok(report)
+        }
+    }
+}
+
+/// Refuses a motion op whose path leaves the travel of an axis, before it is planned.
+fn check_travel(
+    op: &Op,
+    letters: &[AxisLetter],
+    travel: &[[f64; 2]],
+    path: &Path,
+) -> Result<(), Diagnostic> {
+    let Some((lo, hi)) = crate::bounds::op_bounds(&op.kind) else {
+        return Ok(());
+    };
+    for (i, &l) in letters.iter().enumerate() {
+        let [min, max] = travel[i];
+        let (a, b) = (lo[l], hi[l]);
+        if a < min - 1e-9 || b > max + 1e-9 {
+            let v = if a < min - 1e-9 { a } else { b };
+            let message = format!("axis {l} would move to {v:.4}, outside its travel [{min}, {max}]");
+            return Err(Diagnostic {
+                file: path.to_path_buf(),
+                line: op.loc.line,
+                col: op.loc.col,
+                block: op.loc.block,
+                message: match op.loc.block {
+                    Some(n) => format!("block {n}: {message}"),
+                    None => message,
+                },
+            });
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,190 @@
+//! End-to-end: the example programs on the built-in simulated mill, checked against geometry
+//! computed here by hand from the program text (not from the interpreter or planner).
+
+mod common;
+
+use common::{assert_within_limits, program, run};
+use klar::config::MachineConfig;
+
+/// An element of the rectangle contour as written in programs/rectangle.h, with the arc
+/// centres worked out by hand in the comments there.
+enum Element {
+    Line([f64; 2], [f64; 2]),
+    /// centre, radius, start angle, end angle (degrees, clockwise from start to end)
+    ArcCw([f64; 2], f64, f64, f64),
+}
+
+fn rectangle_contour() -> Vec<Element> {
+    use Element::*;
+    vec![
+        Line([-10.0, 10.0], [0.0, 10.0]),
+        Line([0.0, 10.0], [0.0, 50.0]),
+        ArcCw([10.0, 50.0], 10.0, 180.0, 90.0),
+        Line([10.0, 60.0], [80.0, 60.0]),
+        ArcCw([80.0, 40.0], 20.0, 90.0, 0.0),
+        Line([100.0, 40.0], [100.0, 10.0]),
+        ArcCw([90.0, 10.0], 10.0, 0.0, -90.0),
+        Line([90.0, 0.0], [10.0, 0.0]),
+        ArcCw([10.0, 10.0], 10.0, 270.0, 180.0),
+    ]
+}
+
+fn distance_to(e: &Element, p: [f64; 2]) -> f64 {
+    match e {
+        Element::Line(a, b) => {
+            let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+            let len2 = dx * dx + dy * dy;
+            let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / len2).clamp(0.0, 1.0);
+            ((p[0] - a[0] - t * dx).powi(2) + (p[1] - a[1] - t * dy).powi(2)).sqrt()
+        }
+        Element::ArcCw(c, r, start, end) => {
+            let ang = (p[1] - c[1]).atan2(p[0] - c[0]).to_degrees();
+            // clockwise sweep from start to the point, compared with the whole sweep
+            let swept = (start - ang).rem_euclid(360.0);
+            let total = (start - end).rem_euclid(360.0);
+            if swept <= total + 1e-9 {
+                ((p[0] - c[0]).hypot(p[1] - c[1]) - r).abs()
+            } else {
+                let e0 = [
+                    c[0] + r * start.to_radians().cos(),
+                    c[1] + r * start.to_radians().sin(),
+                ];
+                let e1 = [
+                    c[0] + r * end.to_radians().cos(),
+                    c[1] + r * end.to_radians().sin(),
+                ];
+                (p[0] - e0[0])
+                    .hypot(p[1] - e0[1])
+                    .min((p[0] - e1[0]).hypot(p[1] - e1[1]))
+            }
+        }
+    }
+}
+
+#[test]
+fn rectangle_follows_the_programmed_contour() {
+    let machine = MachineConfig::builtin_mill();
+    let (result, trace) = run(&program("rectangle.h"), &machine);
+    let report = result.expect("rectangle runs");
+    let x = trace.column("X").unwrap();
+    let y = trace.column("Y").unwrap();
+    let z = trace.column("Z").unwrap();
+    let contour = rectangle_contour();
+    let dt = machine.servo_period;
+
+    // Every commanded sample at cutting depth lies on the contour (arcs within 1e-9 mm: the
+    // sampler evaluates the exact arc).
+    let mut on_depth = 0;
+    for i in 0..x.len() {
+        if (z[i] + 5.0).abs() < 1e-12 {
+            on_depth += 1;
+            let d = contour
+                .iter()
+                .map(|e| distance_to(e, [x[i], y[i]]))
+                .fold(f64::INFINITY, f64::min);
+            assert!(
+                d < 1e-9,
+                "sample {i} ({}, {}) is {d} mm off the contour",
+                x[i],
+                y[i]
+            );
+        }
+    }
+    assert!(on_depth > 1000, "only {on_depth} samples at depth");
+
+    // The planner stops at every corner: the tool comes to rest on each programmed end point.
+    // Rest is not tied to a sample instant, so the nearest sample may lie up to the distance a
+    // jerk-limited start covers in one period, J·T³/6 (with the largest axis jerk).
+    let corners = [
+        [0.0, 10.0],
+        [0.0, 50.0],
+        [10.0, 60.0],
+        [80.0, 60.0],
+        [100.0, 40.0],
+        [100.0, 10.0],
+        [90.0, 0.0],
+        [10.0, 0.0],
+    ];
+    let jerk = machine.axes.iter().map(|a| a.max_jerk).fold(0.0, f64::max);
+    let reach = 2.0 * jerk * dt.powi(3) / 6.0;
+    for c in corners {
+        let nearest = (0..x.len())
+            .filter(|&i| z[i] == -5.0)
+            .map(|i| (x[i] - c[0]).hypot(y[i] - c[1]))
+            .fold(f64::INFINITY, f64::min);
+        assert!(
+            nearest <= reach,
+            "end point {c:?}: nearest sample {nearest} mm away"
+        );
+    }
+    // Program end: the last block's end point.
+    let n = x.len() - 1;
+    assert_eq!((x[n], y[n], z[n]), (-10.0, 10.0, 50.0));
+
+    // Path speed at depth never above the programmed F600 (10 mm/s) beyond rounding.
+    for i in 1..x.len() {
+        if z[i] == -5.0 && z[i - 1] == -5.0 {
+            let v = (x[i] - x[i - 1]).hypot(y[i] - y[i - 1]) / dt;
+            assert!(v <= 10.0 * (1.0 + 1e-9), "path speed {v} mm/s above F600");
+        }
+    }
+    assert_within_limits(&trace, &machine);
+    assert!(report.blocks >= 19, "blocks executed: {}", report.blocks);
+    for (l, fe) in &report.max_following_error {
+        assert!(*fe < 0.05, "axis {l}: following error {fe} mm");
+    }
+}
+
+#[test]
+fn helix_samples_lie_on_the_cylinder_and_rise_linearly() {
+    let machine = MachineConfig::builtin_mill();
+    let (result, trace) = run(&program("helix_thread.h"), &machine);
+    result.expect("helix runs");
+    let x = trace.column("X").unwrap();
+    let y = trace.column("Y").unwrap();
+    let z = trace.column("Z").unwrap();
+    // From the program: pole X0 Y0, radius 15, start angle 0 at Z-8.25, IPA+2160, IZ+9.
+    let (z0, h, ipa, r) = (-8.25, 9.0, 2160.0f64, 15.0);
+    let mut unwrapped = 0.0f64;
+    let mut last_angle: Option<f64> = None;
+    let mut count = 0;
+    for i in 0..x.len() {
+        // Helix samples: strictly between start and end height, off the bore axis (the
+        // rapid plunge runs down the axis at X0 Y0).
+        if z[i] > z0 + 1e-9 && z[i] < z0 + h - 1e-9 && x[i].hypot(y[i]) > 1.0 {
+            count += 1;
+            let radius = x[i].hypot(y[i]);
+            assert!((radius - r).abs() < 1e-9, "sample {i}: radius {radius}");
+            let a = y[i].atan2(x[i]).to_degrees();
+            if let Some(prev) = last_angle {
+                let mut d = a - prev;
+                if d < -180.0 {
+                    d += 360.0;
+                }
+                assert!(d > 0.0, "DR+ must turn counter-clockwise (sample {i})");
+                unwrapped += d;
+            } else {
+                unwrapped = a.rem_euclid(360.0);
+            }
+            last_angle = Some(a);
+            let expected_z = z0 + h * unwrapped / ipa;
+            assert!(
+                (z[i] - expected_z).abs() < 1e-9,
+                "sample {i}: z {} but {} from the angle",
+                z[i],
+                expected_z
+            );
+        }
+    }
+    assert!(count > 10_000, "only {count} helix samples");
+    assert!((unwrapped - ipa).abs() < 1.0, "turned {unwrapped} degrees");
+    assert_within_limits(&trace, &machine);
+}
+
+#[test]
+fn the_same_program_gives_the_same_trace_bit_for_bit() {
+    let machine = MachineConfig::builtin_mill();
+    let (_, a) = run(&program("rectangle.h"), &machine);
+    let (_, b) = run(&program("rectangle.h"), &machine);
+    assert_eq!(a, b);
+}
