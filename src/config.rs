@@ -5,11 +5,14 @@
 //! Units: positions in mm (linear) or degrees (rotary), velocities per second, accelerations
 //! per second², jerks per second³, periods in seconds.
 
+use klar_drivers::cia402::{CanOpenConfig, DriveConfig};
+use klar_drivers::modbus::{ModbusServoConfig, ModbusVfdConfig};
+use klar_drivers::stepdir::StepDirConfig;
 use klar_interp::AxisLetter;
-use klar_drivers::modbus::ModbusVfdConfig;
 use klar_motion::AxisLimits;
 use klar_sim::plant::SimAxisParams;
 use serde::Deserialize;
+use std::collections::BTreeMap;
 use std::path::Path;
 
 /// Linear or rotary.
@@ -28,6 +31,61 @@ pub enum AxisKind {
 pub enum BackendConfig {
     /// A simulated servo axis (klar-sim).
     Sim(SimAxisParams),
+    /// A CiA 402 drive on a CANopen bus named in `[canopen.NAME]`.
+    Canopen(CanopenAxisConfig),
+    /// A Modbus RTU positioning drive (auxiliary axes only: too slow for contouring).
+    Modbus(ModbusAxisConfig),
+    /// A stepper drive on step/direction outputs.
+    Stepdir(StepDirAxisConfig),
+}
+
+/// An axis on a CiA 402 drive.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CanopenAxisConfig {
+    /// Name of the bus in `[canopen.NAME]`.
+    pub bus: String,
+    /// The drive: node, scaling, homing, mode (see docs/canopen.md).
+    pub drive: DriveConfig,
+    /// On a simulated bus: the servo plant behind the drive (defaults when absent).
+    #[serde(default)]
+    pub plant: Option<SimAxisParams>,
+}
+
+/// An axis on a Modbus RTU positioning drive.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ModbusAxisConfig {
+    /// The drive: serial line, unit, register map (see docs/modbus.md).
+    pub servo: ModbusServoConfig,
+    /// Window within which the axis counts as in position after a move, mm or degrees.
+    #[serde(default = "default_in_position")]
+    pub in_position: f64,
+    /// How long a positioning move may take to settle after its setpoints end, s.
+    #[serde(default = "default_settle_timeout")]
+    pub settle_timeout: f64,
+    /// When present, klar starts a simulated drive with this plant on a pseudo-terminal and
+    /// talks to it instead of `servo.serial.port`.
+    #[serde(default)]
+    pub simulate: Option<SimAxisParams>,
+}
+
+fn default_in_position() -> f64 {
+    0.01
+}
+fn default_settle_timeout() -> f64 {
+    5.0
+}
+
+/// An axis on a stepper drive.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StepDirAxisConfig {
+    /// Step timing, scaling, switches (see docs/stepdir.md).
+    pub stepdir: StepDirConfig,
+    /// Drive a simulated stepper motor instead of GPIO lines.
+    #[serde(default)]
+    pub simulate: bool,
 }
 
 impl Default for BackendConfig {
@@ -112,6 +170,16 @@ pub struct ModbusSpindleConfig {
     pub simulate: Option<SimSpindleConfig>,
 }
 
+/// A spindle on a CiA 402 drive in cyclic synchronous velocity mode.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CanopenSpindleConfig {
+    /// Name of the bus in `[canopen.NAME]`.
+    pub bus: String,
+    /// The drive (see docs/canopen.md).
+    pub drive: klar_drivers::cia402::SpindleConfig,
+}
+
 /// Which backend drives the spindle.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
@@ -120,6 +188,8 @@ pub enum SpindleBackendConfig {
     Sim(SimSpindleConfig),
     /// Modbus RTU VFD.
     Modbus(ModbusSpindleConfig),
+    /// CiA 402 drive on a CANopen bus.
+    Canopen(CanopenSpindleConfig),
 }
 
 impl Default for SpindleBackendConfig {
@@ -164,6 +234,9 @@ pub struct MachineConfig {
     /// Simulation only: axes start referenced, no homing needed.
     #[serde(default)]
     pub start_homed: bool,
+    /// CANopen buses by name; their drives come from the axes (and spindle) naming them.
+    #[serde(default)]
+    pub canopen: BTreeMap<String, CanOpenConfig>,
 }
 
 /// What can be wrong with a machine file.
@@ -268,6 +341,21 @@ impl MachineConfig {
             if !(lo.is_finite() && hi.is_finite() && lo < hi) {
                 return Err(format!("axis {l}: travel [{lo}, {hi}] must have min < max"));
             }
+            match &a.backend {
+                BackendConfig::Canopen(c) if !self.canopen.contains_key(&c.bus) => {
+                    return Err(format!("axis {l}: no [canopen.{}] bus", c.bus));
+                }
+                BackendConfig::Modbus(m) => {
+                    positive(&format!("axis {l}: in_position"), m.in_position)?;
+                    positive(&format!("axis {l}: settle_timeout"), m.settle_timeout)?;
+                }
+                BackendConfig::Stepdir(_) if a.start != 0.0 => {
+                    return Err(format!(
+                        "axis {l}: a step/dir axis counts from 0 at power-up; start must be 0"
+                    ));
+                }
+                _ => {}
+            }
             if !(a.start >= lo && a.start <= hi) {
                 return Err(format!(
                     "axis {l}: start {} is outside travel [{lo}, {hi}]",
@@ -280,6 +368,12 @@ impl MachineConfig {
             positive("spindle.at_speed_timeout", s.at_speed_timeout)?;
             let sim = match &s.backend {
                 SpindleBackendConfig::Sim(sim) => Some(sim),
+                SpindleBackendConfig::Canopen(c) => {
+                    if !self.canopen.contains_key(&c.bus) {
+                        return Err(format!("spindle: no [canopen.{}] bus", c.bus));
+                    }
+                    None
+                }
                 SpindleBackendConfig::Modbus(m) => {
                     if m.vfd.max_rpm < s.max_rpm {
                         return Err(format!(
@@ -292,7 +386,10 @@ impl MachineConfig {
             };
             if let Some(sim) = sim {
                 positive("spindle simulation acceleration", sim.acceleration)?;
-                positive("spindle simulation at_speed_fraction", sim.at_speed_fraction)?;
+                positive(
+                    "spindle simulation at_speed_fraction",
+                    sim.at_speed_fraction,
+                )?;
             }
         }
         Ok(())
@@ -314,10 +411,24 @@ impl MachineConfig {
     /// True when a backend runs on the wall clock (a bus, a serial line, a device simulated
     /// in its own thread): such a machine can only run with `--realtime`.
     pub fn needs_wall_clock(&self) -> bool {
-        matches!(
+        use klar_drivers::cia402::BusConfig;
+        let modbus_spindle = matches!(
             self.spindle.as_ref().map(|s| &s.backend),
             Some(SpindleBackendConfig::Modbus(_))
-        )
+        );
+        let modbus_axis = self
+            .axes
+            .iter()
+            .any(|a| matches!(a.backend, BackendConfig::Modbus(_)));
+        let real_stepdir = self
+            .axes
+            .iter()
+            .any(|a| matches!(&a.backend, BackendConfig::Stepdir(s) if !s.simulate));
+        let real_can = self
+            .canopen
+            .values()
+            .any(|c| matches!(c.bus, BusConfig::Socketcan { .. } | BusConfig::Slcan { .. }));
+        modbus_spindle || modbus_axis || real_stepdir || real_can
     }
 
     /// The axis letters in machine order.

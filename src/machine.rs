@@ -2,13 +2,24 @@
 //! index, and the spindle. One [`MachineIo::cycle`] is one servo cycle for every backend.
 
 use crate::config::{BackendConfig, MachineConfig, SimSpindleConfig, SpindleBackendConfig};
-use klar_drivers::modbus::ModbusVfd;
+use klar_drivers::can::memory::MemoryBus;
+use klar_drivers::can::slcan::{SlcanBus, SlcanOptions};
+use klar_drivers::cia402::{BusConfig, CanOpenConfig, Cia402Backend, DriveConfig};
+use klar_drivers::modbus::limits as modbus_limits;
+use klar_drivers::modbus::{ModbusServo, ModbusVfd};
+use klar_drivers::stepdir::limits as stepdir_limits;
+use klar_drivers::stepdir::{StepDirAxis, StepDirOutputs, SwitchInputs};
 use klar_motion::{
     AxisBackend, AxisFeedback, BackendError, Setpoint, SpindleBackend, SpindleFeedback,
 };
 use klar_sim::axis::SimBackend;
+use klar_sim::cia402::{SimCia402Drive, SimDriveConfig, serve_on_slcan};
+use klar_sim::modbus::{PositioningLimits, simulate_servo};
 use klar_sim::modbus::{SimSpindle, SpindleParams, simulate_vfd};
+use klar_sim::plant::SimAxisParams;
+use klar_sim::stepper::{NoDelay, PinRole, SimPin, SwitchPositions, stepper};
 use std::any::Any;
+use std::collections::BTreeMap;
 
 /// One backend and the machine axes it serves.
 struct BackendSlot {
@@ -29,11 +40,9 @@ pub enum MachineError {
     },
 }
 
-/// The spindle backend with what it needs kept alive.
+/// The spindle backend.
 pub struct Spindle {
     backend: Box<dyn SpindleBackend>,
-    /// Simulated devices running beside the backend (a VFD on a pseudo-terminal).
-    _companions: Vec<Box<dyn Any>>,
     /// The last speed commanded, signed rpm.
     commanded: f64,
     /// Highest speed, rpm.
@@ -70,6 +79,8 @@ pub struct MachineIo {
     slot_setpoints: Vec<Setpoint>,
     slot_feedback: Vec<AxisFeedback>,
     spindle: Option<Spindle>,
+    /// Simulated devices and buses running beside the backends (kept alive, dropped last).
+    _companions: Vec<Box<dyn Any>>,
 }
 
 fn sim_spindle_params(max_rpm: f64, sim: &SimSpindleConfig) -> SpindleParams {
@@ -81,12 +92,95 @@ fn sim_spindle_params(max_rpm: f64, sim: &SimSpindleConfig) -> SpindleParams {
     }
 }
 
+/// Axes of one CANopen bus gathered from the machine's axes and spindle.
+#[derive(Default)]
+struct CanGroup {
+    axes: Vec<usize>,
+    drives: Vec<DriveConfig>,
+    plants: Vec<(SimAxisParams, f64)>,
+    spindle: Option<klar_drivers::cia402::SpindleConfig>,
+}
+
+fn open_err(what: impl Into<String>, e: &dyn std::fmt::Display) -> MachineError {
+    MachineError::Open {
+        what: what.into(),
+        message: e.to_string(),
+    }
+}
+
+/// Opens a CANopen bus with its drives; returns the backend and what must stay alive.
+fn open_canopen(
+    name: &str,
+    network: &CanOpenConfig,
+    group: CanGroup,
+    period: f64,
+) -> Result<(Cia402Backend, Vec<Box<dyn Any>>), MachineError> {
+    let what = format!("CANopen bus {name}");
+    let mut config = network.clone();
+    config.drives = group.drives;
+    config.spindle = group.spindle;
+    let mut sim_drives = Vec::new();
+    if matches!(
+        config.bus,
+        BusConfig::Sim { .. } | BusConfig::SimSlcan { .. }
+    ) {
+        for (d, (plant, start)) in config.drives.iter().zip(group.plants) {
+            let mut plant = plant;
+            plant.counts_per_unit = d.counts_per_unit.abs();
+            let (drive, _control) = SimCia402Drive::new(SimDriveConfig {
+                node: d.node,
+                plant,
+                start_position: start,
+            });
+            sim_drives.push(drive);
+        }
+        if let Some(s) = &config.spindle {
+            let (drive, _control) = SimCia402Drive::new(SimDriveConfig {
+                node: s.node,
+                plant: klar_sim::cia402::spindle_plant(s.counts_per_rev),
+                start_position: 0.0,
+            });
+            sim_drives.push(drive);
+        }
+    }
+    let mut companions: Vec<Box<dyn Any>> = Vec::new();
+    let backend = match config.bus {
+        BusConfig::Sim { .. } => {
+            let bus = MemoryBus::new();
+            for d in sim_drives {
+                bus.attach(Box::new(d));
+            }
+            let endpoint = bus.endpoint();
+            companions.push(Box::new(bus));
+            Cia402Backend::with_bus(&config, period, Box::new(endpoint))
+        }
+        BusConfig::SimSlcan { bitrate } => {
+            let (host, adapter) =
+                serialport::TTYPort::pair().map_err(|e| open_err(what.clone(), &e))?;
+            let runner = serve_on_slcan(adapter, bitrate, sim_drives)
+                .map_err(|e| open_err(what.clone(), &e))?;
+            companions.push(Box::new(runner));
+            let line = SlcanBus::from_tty(host, SlcanOptions::host(bitrate))
+                .map_err(|e| open_err(what.clone(), &e))?;
+            Cia402Backend::with_bus(&config, period, Box::new(line))
+        }
+        _ => Cia402Backend::open(&config, period),
+    }
+    .map_err(|e| open_err(what, &e))?;
+    Ok((backend, companions))
+}
+
 impl MachineIo {
     /// Opens the backends a machine config names.
     pub fn open(config: &MachineConfig) -> Result<Self, MachineError> {
+        let period = config.servo_period;
+        let mut slots = Vec::new();
+        let mut companions: Vec<Box<dyn Any>> = Vec::new();
         let mut sim_axes = Vec::new();
         let mut sim_index = Vec::new();
+        let mut can: BTreeMap<String, CanGroup> = BTreeMap::new();
         for (i, a) in config.axes.iter().enumerate() {
+            let l = a.letter;
             match &a.backend {
                 BackendConfig::Sim(params) => {
                     let mut p = params.clone();
@@ -96,54 +190,127 @@ impl MachineIo {
                     sim_axes.push((p, a.start));
                     sim_index.push(i);
                 }
+                BackendConfig::Canopen(c) => {
+                    let g = can.entry(c.bus.clone()).or_default();
+                    g.axes.push(i);
+                    g.drives.push(c.drive.clone());
+                    let mut plant = c.plant.clone().unwrap_or_default();
+                    plant.start_homed = plant.start_homed || config.start_homed;
+                    g.plants.push((plant, a.start));
+                }
+                BackendConfig::Modbus(m) => {
+                    let what = format!("axis {l} (Modbus)");
+                    modbus_limits::check_servo(&m.servo, period, false)
+                        .map_err(|e| open_err(what.clone(), &e))?;
+                    let backend = match &m.simulate {
+                        None => ModbusServo::open(&m.servo),
+                        Some(plant) => {
+                            let limits = PositioningLimits {
+                                velocity: a.max_velocity,
+                                acceleration: a.max_acceleration,
+                            };
+                            let sim = simulate_servo(&m.servo, plant.clone(), limits, a.start)
+                                .map_err(|e| open_err(what.clone(), &e))?;
+                            let backend = ModbusServo::open(&sim.config);
+                            companions.push(Box::new(sim));
+                            backend
+                        }
+                    }
+                    .map_err(|e| open_err(what, &e))?;
+                    slots.push(BackendSlot {
+                        backend: Box::new(backend),
+                        axes: vec![i],
+                    });
+                }
+                BackendConfig::Stepdir(s) => {
+                    let what = format!("axis {l} (step/dir)");
+                    stepdir_limits::check(&s.stepdir, period, a.max_velocity)
+                        .map_err(|e| open_err(what.clone(), &e))?;
+                    if !s.simulate {
+                        return Err(open_err(
+                            what,
+                            &"GPIO step/dir needs a build with the linux-gpio feature and a \
+                              [pins] table; set simulate = true to run without hardware",
+                        ));
+                    }
+                    let (_motor, pin) = stepper(SwitchPositions::default());
+                    let outputs = StepDirOutputs {
+                        step: pin(PinRole::Step),
+                        dir: pin(PinRole::Dir),
+                        enable: Some(pin(PinRole::Enable)),
+                        enable_active_low: false,
+                    };
+                    let axis: StepDirAxis<SimPin, SimPin, NoDelay> = StepDirAxis::new(
+                        &s.stepdir,
+                        period,
+                        outputs,
+                        SwitchInputs::default(),
+                        NoDelay,
+                    )
+                    .map_err(|e| open_err(what, &e))?;
+                    slots.push(BackendSlot {
+                        backend: Box::new(axis),
+                        axes: vec![i],
+                    });
+                }
             }
         }
-        let mut slots = Vec::new();
         if !sim_axes.is_empty() {
-            let backend = SimBackend::try_new(sim_axes, config.servo_period).map_err(|e| {
-                MachineError::Open {
-                    what: "simulated axes".into(),
-                    message: e.to_string(),
-                }
-            })?;
+            let backend = SimBackend::try_new(sim_axes, period)
+                .map_err(|e| open_err("simulated axes", &e))?;
             slots.push(BackendSlot {
                 backend: Box::new(backend),
                 axes: sim_index,
             });
         }
+        if let Some(SpindleBackendConfig::Canopen(c)) = config.spindle.as_ref().map(|s| &s.backend)
+        {
+            can.entry(c.bus.clone()).or_default().spindle = Some(c.drive.clone());
+        }
+        let mut can_spindle: Option<Box<dyn SpindleBackend>> = None;
+        for (name, group) in can {
+            let Some(network) = config.canopen.get(&name) else {
+                return Err(open_err(format!("CANopen bus {name}"), &"not configured"));
+            };
+            let axes = group.axes.clone();
+            let has_spindle = group.spindle.is_some();
+            let (backend, keep) = open_canopen(&name, network, group, period)?;
+            companions.extend(keep);
+            if has_spindle && let Some(sp) = backend.spindle() {
+                can_spindle = Some(Box::new(sp));
+            }
+            slots.push(BackendSlot {
+                backend: Box::new(backend),
+                axes,
+            });
+        }
         let spindle = match &config.spindle {
             None => None,
             Some(s) => {
-                let (backend, companions): (Box<dyn SpindleBackend>, Vec<Box<dyn Any>>) =
-                    match &s.backend {
-                        SpindleBackendConfig::Sim(sim) => (
-                            Box::new(SimSpindle::new(sim_spindle_params(s.max_rpm, sim))),
-                            Vec::new(),
+                let backend: Box<dyn SpindleBackend> = match &s.backend {
+                    SpindleBackendConfig::Sim(sim) => {
+                        Box::new(SimSpindle::new(sim_spindle_params(s.max_rpm, sim)))
+                    }
+                    SpindleBackendConfig::Canopen(_) => can_spindle.take().ok_or_else(|| {
+                        open_err("spindle", &"the CANopen backend has no spindle drive")
+                    })?,
+                    SpindleBackendConfig::Modbus(m) => match &m.simulate {
+                        None => Box::new(
+                            ModbusVfd::open(&m.vfd).map_err(|e| open_err("spindle VFD", &e))?,
                         ),
-                        SpindleBackendConfig::Modbus(m) => {
-                            let open_err = |e: &dyn std::fmt::Display| MachineError::Open {
-                                what: "spindle VFD".into(),
-                                message: e.to_string(),
-                            };
-                            match &m.simulate {
-                                None => (
-                                    Box::new(ModbusVfd::open(&m.vfd).map_err(|e| open_err(&e))?),
-                                    Vec::new(),
-                                ),
-                                Some(sim) => {
-                                    let simulated =
-                                        simulate_vfd(&m.vfd, sim_spindle_params(m.vfd.max_rpm, sim))
-                                            .map_err(|e| open_err(&e))?;
-                                    let vfd = ModbusVfd::open(&simulated.config)
-                                        .map_err(|e| open_err(&e))?;
-                                    (Box::new(vfd), vec![Box::new(simulated) as Box<dyn Any>])
-                                }
-                            }
+                        Some(sim) => {
+                            let simulated =
+                                simulate_vfd(&m.vfd, sim_spindle_params(m.vfd.max_rpm, sim))
+                                    .map_err(|e| open_err("spindle VFD", &e))?;
+                            let vfd = ModbusVfd::open(&simulated.config)
+                                .map_err(|e| open_err("spindle VFD", &e))?;
+                            companions.push(Box::new(simulated));
+                            Box::new(vfd)
                         }
-                    };
+                    },
+                };
                 Some(Spindle {
                     backend,
-                    _companions: companions,
                     commanded: 0.0,
                     max_rpm: s.max_rpm,
                     at_speed_timeout: s.at_speed_timeout,
@@ -170,6 +337,7 @@ impl MachineIo {
             slot_setpoints: Vec::with_capacity(n),
             slot_feedback: Vec::with_capacity(n),
             spindle,
+            _companions: companions,
         })
     }
 

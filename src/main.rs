@@ -224,7 +224,8 @@ fn cmd_run(
     println!("blocks:       {}", report.blocks);
     println!("servo cycles: {}", report.cycles);
     for (l, fe) in &report.max_following_error {
-        println!("max following error {l}: {:.4} mm", fe);
+        let unit = if l.is_rotary() { "deg" } else { "mm" };
+        println!("max following error {l}: {fe:.4} {unit}");
     }
     if report.spindle_wait > 0.0 {
         println!("spindle wait: {:.3} s", report.spindle_wait);

@@ -12,7 +12,7 @@
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
-use crate::config::MachineConfig;
+use crate::config::{BackendConfig, MachineConfig};
 use crate::machine::{MachineError, MachineIo};
 use crate::trace::TraceWriter;
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
@@ -21,6 +21,7 @@ use klar_motion::kinematics::{Cartesian, Kinematics};
 use klar_motion::{
     AxisFault, BackendError, MotionError, Planner, PlannerConfig, Sample, Setpoint, Step,
 };
+use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -122,6 +123,10 @@ struct Session<'a, 'w> {
     commanded: Vec<f64>,
     actual: Vec<f64>,
     warned_no_spindle: bool,
+    /// Per machine axis: (in-position window, settle timeout) for positioning-only axes.
+    positioning: Vec<Option<(f64, f64)>>,
+    /// Source of the last sample sent.
+    last_loc: Option<SourceLoc>,
 }
 
 impl Session<'_, '_> {
@@ -168,8 +173,13 @@ impl Session<'_, '_> {
         Ok(())
     }
 
-    /// Sends one planner sample to the axes.
+    /// Sends one planner sample to the axes. Before the first sample of a new block, every
+    /// positioning axis must have reached its last commanded position.
     fn apply_sample(&mut self, sample: &Sample) -> Result<(), RunError> {
+        if self.last_loc != Some(sample.loc) {
+            self.settle_all()?;
+            self.last_loc = Some(sample.loc);
+        }
         self.line = sample.loc.line;
         self.kin.to_machine(&sample.pose, &mut self.commanded);
         for (i, sp) in self.io.setpoints_mut().iter_mut().enumerate() {
@@ -181,6 +191,28 @@ impl Session<'_, '_> {
             };
         }
         self.servo_cycle(sample.t + self.shift)
+    }
+
+    /// Holds until every positioning axis (one that follows its own profile behind a slow
+    /// link) has reached its last commanded position, each within its window and timeout.
+    fn settle_all(&mut self) -> Result<(), RunError> {
+        let from = self.t;
+        for axis in 0..self.letters.len() {
+            let Some((window, timeout)) = self.positioning[axis] else {
+                continue;
+            };
+            while (self.commanded[axis] - self.actual[axis]).abs() > window {
+                if self.t - from > timeout {
+                    return Err(RunError::Fault {
+                        axis: self.letters[axis],
+                        fault: AxisFault::FollowingError(self.commanded[axis] - self.actual[axis]),
+                        line: self.line,
+                    });
+                }
+                self.hold_cycle()?;
+            }
+        }
+        Ok(())
     }
 
     /// One cycle holding the last commanded position; planner time stands still.
@@ -216,17 +248,7 @@ impl Session<'_, '_> {
     }
 
     fn diagnostic(&self, loc: SourceLoc, message: String) -> RunError {
-        let message = match loc.block {
-            Some(n) => format!("block {n}: {message}"),
-            None => message,
-        };
-        RunError::Program(Diagnostic {
-            file: self.path.to_path_buf(),
-            line: loc.line,
-            col: loc.col,
-            block: loc.block,
-            message,
-        })
+        RunError::Program(block_diagnostic(self.path, loc, message))
     }
 
     fn spindle_command(
@@ -238,10 +260,9 @@ impl Session<'_, '_> {
         let rpm = match speed {
             SpindleSpeed::Rpm(r) => r,
             SpindleSpeed::SurfaceSpeed(_) => {
-                return Err(self.diagnostic(
-                    loc,
-                    "constant surface speed needs a lathe".to_string(),
-                ));
+                return Err(
+                    self.diagnostic(loc, "constant surface speed needs a lathe".to_string())
+                );
             }
         };
         let signed = match dir {
@@ -251,7 +272,10 @@ impl Session<'_, '_> {
         };
         let Some(spindle) = self.io.spindle_mut() else {
             if signed != 0.0 && !self.warned_no_spindle {
-                tracing::warn!(line = loc.line, "this machine has no spindle: S/M3/M4 ignored");
+                tracing::warn!(
+                    line = loc.line,
+                    "this machine has no spindle: S/M3/M4 ignored"
+                );
                 self.warned_no_spindle = true;
             }
             return Ok(());
@@ -274,10 +298,7 @@ impl Session<'_, '_> {
         let waited_from = self.t;
         loop {
             self.hold_cycle()?;
-            let at_speed = self
-                .io
-                .spindle_mut()
-                .is_some_and(|s| s.feedback().at_speed);
+            let at_speed = self.io.spindle_mut().is_some_and(|s| s.feedback().at_speed);
             if at_speed {
                 break;
             }
@@ -348,6 +369,15 @@ pub fn run_program(
         commanded: config.axes.iter().map(|a| a.start).collect(),
         actual: vec![0.0; n],
         warned_no_spindle: false,
+        positioning: config
+            .axes
+            .iter()
+            .map(|a| match &a.backend {
+                BackendConfig::Modbus(m) => Some((m.in_position, m.settle_timeout)),
+                _ => None,
+            })
+            .collect(),
+        last_loc: None,
         letters,
     };
 
@@ -355,12 +385,34 @@ pub fn run_program(
     let mut pending_error: Option<RunError> = None;
     let outcome: Result<(), RunError> = enabled.map_err(RunError::from).and_then(|()| {
         let mut input_done = false;
+        let mut queue: VecDeque<Op> = VecDeque::new();
         loop {
             while !input_done && planner.needs_input() {
+                if let Some(op) = queue.pop_front() {
+                    if let Err(e) = planner.push(op) {
+                        pending_error = Some(RunError::Motion(e));
+                        planner.finish();
+                        input_done = true;
+                    }
+                    continue;
+                }
                 let next = match interp.next() {
                     Some(Ok(op)) => check_travel(&op, &session.letters, &session.travel, path)
+                        .and_then(|()| check_positioning(&op, &session, path))
                         .map_err(RunError::Program)
-                        .and_then(|()| planner.push(op).map_err(RunError::Motion)),
+                        .map(|()| {
+                            // A positioning axis moves between exact stops, so the path
+                            // comes to rest before and after its block.
+                            let isolate = moves_positioning_axis(&op, &session);
+                            if isolate {
+                                queue.push_back(exact_stop(op.loc));
+                            }
+                            let loc = op.loc;
+                            queue.push_back(op);
+                            if isolate {
+                                queue.push_back(exact_stop(loc));
+                            }
+                        }),
                     Some(Err(d)) => Err(RunError::Program(d)),
                     None => {
                         planner.finish();
@@ -376,7 +428,10 @@ pub fn run_program(
                 }
             }
             match planner.next_step() {
-                None => break,
+                None => {
+                    session.settle_all()?;
+                    break;
+                }
                 Some(Step::Sample(sample)) => session.apply_sample(&sample)?,
                 Some(Step::Event(op)) => session.handle_event(&op)?,
             }
@@ -401,6 +456,63 @@ pub fn run_program(
     }
 }
 
+fn exact_stop(loc: SourceLoc) -> Op {
+    Op {
+        kind: OpKind::ExactStop,
+        loc,
+    }
+}
+
+/// True when a motion op moves a positioning-only axis.
+fn moves_positioning_axis(op: &Op, session: &Session<'_, '_>) -> bool {
+    let Some((lo, hi)) = crate::bounds::op_bounds(&op.kind) else {
+        return false;
+    };
+    session
+        .letters
+        .iter()
+        .enumerate()
+        .any(|(i, l)| session.positioning[i].is_some() && hi[*l] - lo[*l] > 1e-12)
+}
+
+/// A diagnostic for the block at `loc`, its message prefixed with the block number.
+fn block_diagnostic(path: &Path, loc: SourceLoc, message: String) -> Diagnostic {
+    Diagnostic {
+        file: path.to_path_buf(),
+        line: loc.line,
+        col: loc.col,
+        block: loc.block,
+        message: match loc.block {
+            Some(n) => format!("block {n}: {message}"),
+            None => message,
+        },
+    }
+}
+
+/// Refuses a motion op that moves a positioning-only axis together with another axis: such an
+/// axis follows its own profile behind a slow link and cannot keep to a shared path.
+fn check_positioning(op: &Op, session: &Session<'_, '_>, path: &Path) -> Result<(), Diagnostic> {
+    let Some((lo, hi)) = crate::bounds::op_bounds(&op.kind) else {
+        return Ok(());
+    };
+    let moved: Vec<usize> = (0..9).filter(|&i| hi.0[i] - lo.0[i] > 1e-12).collect();
+    if moved.len() < 2 {
+        return Ok(());
+    }
+    for (i, &l) in session.letters.iter().enumerate() {
+        if session.positioning[i].is_some() && moved.contains(&l.index()) {
+            return Err(block_diagnostic(
+                path,
+                op.loc,
+                format!(
+                    "axis {l} is a positioning axis (Modbus): program it in a block of its own"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Refuses a motion op whose path leaves the travel of an axis, before it is planned.
 fn check_travel(
     op: &Op,
@@ -416,17 +528,11 @@ fn check_travel(
         let (a, b) = (lo[l], hi[l]);
         if a < min - 1e-9 || b > max + 1e-9 {
             let v = if a < min - 1e-9 { a } else { b };
-            let message = format!("axis {l} would move to {v:.4}, outside its travel [{min}, {max}]");
-            return Err(Diagnostic {
-                file: path.to_path_buf(),
-                line: op.loc.line,
-                col: op.loc.col,
-                block: op.loc.block,
-                message: match op.loc.block {
-                    Some(n) => format!("block {n}: {message}"),
-                    None => message,
-                },
-            });
+            return Err(block_diagnostic(
+                path,
+                op.loc,
+                format!("axis {l} would move to {v:.4}, outside its travel [{min}, {max}]"),
+            ));
         }
     }
     Ok(())

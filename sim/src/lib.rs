@@ -5,8 +5,10 @@
 //! - [`axis`]: simulated axes as an [`klar_motion::AxisBackend`].
 //! - [`cia402`]: a simulated CANopen CiA 402 drive.
 //! - [`modbus`]: simulated Modbus RTU devices (servo drive, spindle VFD).
+//! - [`stepper`]: a simulated stepper motor and switches behind step/dir pins.
 
 pub mod axis;
 pub mod cia402;
 pub mod modbus;
 pub mod plant;
+pub mod stepper;

@@ -67,6 +67,15 @@ pub enum BusConfig {
         #[serde(default = "default_bitrate")]
         bitrate: u32,
     },
+    /// Simulated drives behind an slcan adapter emulated on a pseudo-terminal: the whole
+    /// serial path of a real slcan adapter, with no hardware (built by the runtime from
+    /// `klar_sim::cia402::serve_on_slcan`).
+    #[serde(rename = "sim-slcan")]
+    SimSlcan {
+        /// Bitrate in bit/s, for the bus-load check.
+        #[serde(default = "default_bitrate")]
+        bitrate: u32,
+    },
 }
 
 impl BusConfig {
@@ -75,7 +84,8 @@ impl BusConfig {
         match self {
             BusConfig::Socketcan { bitrate, .. }
             | BusConfig::Slcan { bitrate, .. }
-            | BusConfig::Sim { bitrate } => *bitrate,
+            | BusConfig::Sim { bitrate }
+            | BusConfig::SimSlcan { bitrate } => *bitrate,
         }
     }
 }

@@ -34,9 +34,9 @@ pub(crate) fn open_bus(config: &CanOpenConfig) -> Result<Box<dyn CanBus>, Cia402
                 options.serial_baud = *serial_baud;
                 Box::new(crate::can::slcan::SlcanBus::open(port, options)?)
             }
-            BusConfig::Sim { .. } => {
+            BusConfig::Sim { .. } | BusConfig::SimSlcan { .. } => {
                 return Err(Cia402Error::Config(
-                    "a simulated bus is built by klar_sim::cia402::simulated_backend".into(),
+                    "a simulated bus is built by the simulation (klar_sim::cia402)".into(),
                 ));
             }
         };
