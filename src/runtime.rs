@@ -83,6 +83,12 @@ pub enum RunError {
         /// Program line being executed.
         line: u32,
     },
+    /// The run was stopped on request (after a feed hold brought it to rest).
+    #[error("stopped on request (at line {line})")]
+    Stopped {
+        /// Program line being executed.
+        line: u32,
+    },
     /// The machine's backends could not be opened.
     #[error("{0}")]
     Machine(#[from] MachineError),
@@ -103,14 +109,25 @@ pub struct RunFailure {
     pub report: RunReport,
 }
 
-/// The state of one run between servo cycles.
-struct Session<'a, 'w> {
+/// One program run on a machine, advanced step by step ([`Run::step`]) so that a front end
+/// can hold, resume, override and stop it between servo cycles; [`run_program`] drives it to
+/// the end.
+pub struct Run<'a, 'w> {
     path: &'a Path,
     config: &'a MachineConfig,
     letters: Vec<AxisLetter>,
     travel: Vec<[f64; 2]>,
     kin: Cartesian,
     io: MachineIo,
+    interp: Interpreter,
+    planner: Planner,
+    /// Ops read from the interpreter waiting for room in the planner.
+    queue: VecDeque<Op>,
+    /// The interpreter has nothing more to give (end, or an error).
+    input_done: bool,
+    /// An error found while reading ahead, reported once the motion before it is done.
+    pending_error: Option<RunError>,
+    stop_requested: bool,
     trace: Option<TraceWriter<&'w mut dyn Write>>,
     report: RunReport,
     wall_start: Instant,
@@ -129,7 +146,7 @@ struct Session<'a, 'w> {
     last_loc: Option<SourceLoc>,
 }
 
-impl Session<'_, '_> {
+impl Run<'_, '_> {
     /// One servo cycle at machine time `t` with the setpoints already in `io`.
     fn servo_cycle(&mut self, t: f64) -> Result<(), RunError> {
         if self.report.realtime {
@@ -320,139 +337,252 @@ pub fn run_program(
     config: &MachineConfig,
     options: RunOptions<'_>,
 ) -> Result<RunReport, Box<RunFailure>> {
-    let letters = config.letters();
-    let report = RunReport {
-        max_following_error: letters.iter().map(|&l| (l, 0.0)).collect(),
-        realtime: options.realtime || config.needs_wall_clock(),
-        ..RunReport::default()
-    };
-    let fail = |error: RunError, report: &RunReport| {
-        Box::new(RunFailure {
-            error,
-            report: report.clone(),
-        })
-    };
+    let mut run = Run::start(path, config, options)?;
+    loop {
+        match run.step() {
+            Ok(true) => {}
+            Ok(false) => return run.finish(None),
+            Err(e) => return run.finish(Some(e)),
+        }
+    }
+}
 
-    if let Err(diags) = klar_interp::syntax_check(path) {
-        return Err(fail(RunError::Syntax(diags), &report));
+/// A snapshot of a run for displays.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunStatus {
+    /// Machine time, s.
+    pub t: f64,
+    /// Program line of the motion being executed (1-based; 0 before the first).
+    pub line: u32,
+    /// Commanded position per machine axis.
+    pub commanded: Vec<f64>,
+    /// Measured position per machine axis.
+    pub actual: Vec<f64>,
+    /// Following error per machine axis.
+    pub following_error: Vec<f64>,
+    /// True while a feed hold is active.
+    pub held: bool,
+    /// Feed override factor (1.0 = 100 %).
+    pub feed_override: f64,
+    /// Path speed, mm/s.
+    pub path_speed: f64,
+    /// Spindle speed, rpm (signed), when the machine has a spindle.
+    pub spindle_rpm: Option<f64>,
+    /// Blocks executed so far.
+    pub blocks: u64,
+}
+
+impl<'a, 'w> Run<'a, 'w> {
+    /// Checks the program's syntax (nothing moves on a syntax error), opens the machine's
+    /// backends and enables them.
+    pub fn start(
+        path: &'a Path,
+        config: &'a MachineConfig,
+        options: RunOptions<'w>,
+    ) -> Result<Self, Box<RunFailure>> {
+        let letters = config.letters();
+        let report = RunReport {
+            max_following_error: letters.iter().map(|&l| (l, 0.0)).collect(),
+            realtime: options.realtime || config.needs_wall_clock(),
+            ..RunReport::default()
+        };
+        let fail = |error: RunError, report: &RunReport| {
+            Box::new(RunFailure {
+                error,
+                report: report.clone(),
+            })
+        };
+        if let Err(diags) = klar_interp::syntax_check(path) {
+            return Err(fail(RunError::Syntax(diags), &report));
+        }
+        let kin = Cartesian::new(&letters);
+        let mut io = MachineIo::open(config).map_err(|e| fail(e.into(), &report))?;
+        let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
+        let interp =
+            Interpreter::open(path, start).map_err(|d| fail(RunError::Program(d), &report))?;
+        let planner_config = PlannerConfig {
+            limits: config.axis_limits(),
+            period: config.servo_period,
+            tolerance: config.tolerance,
+        };
+        let planner =
+            Planner::new(planner_config, start).map_err(|e| fail(RunError::Motion(e), &report))?;
+        let trace = match options.trace {
+            Some(w) => Some(TraceWriter::new(w, &letters).map_err(|e| fail(e.into(), &report))?),
+            None => None,
+        };
+        io.enable().map_err(|e| fail(e.into(), &report))?;
+        let n = letters.len();
+        Ok(Run {
+            path,
+            config,
+            travel: config.axes.iter().map(|a| a.travel).collect(),
+            kin,
+            io,
+            interp,
+            planner,
+            queue: VecDeque::new(),
+            input_done: false,
+            pending_error: None,
+            stop_requested: false,
+            trace,
+            report,
+            wall_start: Instant::now(),
+            t: 0.0,
+            shift: 0.0,
+            line: 0,
+            commanded: config.axes.iter().map(|a| a.start).collect(),
+            actual: vec![0.0; n],
+            warned_no_spindle: false,
+            positioning: config
+                .axes
+                .iter()
+                .map(|a| match &a.backend {
+                    BackendConfig::Modbus(m) => Some((m.in_position, m.settle_timeout)),
+                    _ => None,
+                })
+                .collect(),
+            last_loc: None,
+            letters,
+        })
     }
 
-    let kin = Cartesian::new(&letters);
-    let io = MachineIo::open(config).map_err(|e| fail(e.into(), &report))?;
-    let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
-    let mut interp =
-        Interpreter::open(path, start).map_err(|d| fail(RunError::Program(d), &report))?;
-    let planner_config = PlannerConfig {
-        limits: config.axis_limits(),
-        period: config.servo_period,
-        tolerance: config.tolerance,
-    };
-    let mut planner =
-        Planner::new(planner_config, start).map_err(|e| fail(RunError::Motion(e), &report))?;
-    let trace = match options.trace {
-        Some(w) => Some(TraceWriter::new(w, &letters).map_err(|e| fail(e.into(), &report))?),
-        None => None,
-    };
-    let n = letters.len();
-    let mut session = Session {
-        path,
-        config,
-        travel: config.axes.iter().map(|a| a.travel).collect(),
-        kin,
-        io,
-        trace,
-        report,
-        wall_start: Instant::now(),
-        t: 0.0,
-        shift: 0.0,
-        line: 0,
-        commanded: config.axes.iter().map(|a| a.start).collect(),
-        actual: vec![0.0; n],
-        warned_no_spindle: false,
-        positioning: config
-            .axes
-            .iter()
-            .map(|a| match &a.backend {
-                BackendConfig::Modbus(m) => Some((m.in_position, m.settle_timeout)),
-                _ => None,
-            })
-            .collect(),
-        last_loc: None,
-        letters,
-    };
+    /// Advances the run by one planner step (a servo cycle or an event). Returns false once
+    /// the program has ended (or a requested stop has come to rest).
+    pub fn step(&mut self) -> Result<bool, RunError> {
+        self.feed_planner();
+        if self.stop_requested && self.planner.path_speed() == 0.0 {
+            return Err(RunError::Stopped { line: self.line });
+        }
+        match self.planner.next_step() {
+            None => {
+                self.settle_all()?;
+                Ok(false)
+            }
+            Some(Step::Sample(sample)) => self.apply_sample(&sample).map(|()| true),
+            Some(Step::Event(op)) => self.handle_event(&op).map(|()| true),
+        }
+    }
 
-    let enabled = session.io.enable();
-    let mut pending_error: Option<RunError> = None;
-    let outcome: Result<(), RunError> = enabled.map_err(RunError::from).and_then(|()| {
-        let mut input_done = false;
-        let mut queue: VecDeque<Op> = VecDeque::new();
-        loop {
-            while !input_done && planner.needs_input() {
-                if let Some(op) = queue.pop_front() {
-                    if let Err(e) = planner.push(op) {
-                        pending_error = Some(RunError::Motion(e));
-                        planner.finish();
-                        input_done = true;
-                    }
-                    continue;
+    /// Feed hold: slows down along the path to a stop and waits.
+    pub fn hold(&mut self) {
+        self.planner.hold();
+    }
+
+    /// Ends a feed hold.
+    pub fn resume(&mut self) {
+        self.planner.resume();
+    }
+
+    /// Sets the feed override (0.0 to 1.5); returns the factor in effect.
+    pub fn set_feed_override(&mut self, factor: f64) -> f64 {
+        self.planner.set_feed_override(factor)
+    }
+
+    /// Stops the run in a controlled way: a feed hold, then the run ends at rest with
+    /// [`RunError::Stopped`].
+    pub fn request_stop(&mut self) {
+        self.stop_requested = true;
+        self.planner.hold();
+    }
+
+    /// A snapshot for displays.
+    pub fn status(&mut self) -> RunStatus {
+        let spindle_rpm = self.io.spindle_mut().map(|s| s.feedback().rpm);
+        RunStatus {
+            t: self.t,
+            line: self.line,
+            commanded: self.commanded.clone(),
+            actual: self.actual.clone(),
+            following_error: self
+                .io
+                .feedback()
+                .iter()
+                .map(|f| f.following_error)
+                .collect(),
+            held: self.planner.is_held(),
+            feed_override: self.planner.feed_override(),
+            path_speed: self.planner.path_speed(),
+            spindle_rpm,
+            blocks: self.interp.blocks_executed(),
+        }
+    }
+
+    /// The machine axis letters, in trace order.
+    pub fn letters(&self) -> &[AxisLetter] {
+        &self.letters
+    }
+
+    /// Ends the run: stops the spindle, disables the axes, flushes the trace and reports.
+    /// `error` is the error that ended the run early, if any; an error found while reading
+    /// ahead (reported after the motion before it finished) comes out here too.
+    pub fn finish(mut self, error: Option<RunError>) -> Result<RunReport, Box<RunFailure>> {
+        self.report.blocks = self.interp.blocks_executed();
+        let disabled = self.io.disable();
+        let report = self.report;
+        let trace_done = match self.trace {
+            Some(t) => t.finish(),
+            None => Ok(()),
+        };
+        let fail = |error: RunError| {
+            Box::new(RunFailure {
+                error,
+                report: report.clone(),
+            })
+        };
+        if let Some(e) = error.or(self.pending_error) {
+            return Err(fail(e));
+        }
+        disabled.map_err(|e| fail(e.into()))?;
+        trace_done.map_err(|e| fail(e.into()))?;
+        Ok(report)
+    }
+
+    /// Moves ops from the interpreter into the planner while it wants more.
+    fn feed_planner(&mut self) {
+        while !self.input_done && self.planner.needs_input() {
+            if let Some(op) = self.queue.pop_front() {
+                if let Err(e) = self.planner.push(op) {
+                    self.stop_reading(RunError::Motion(e));
                 }
-                let next = match interp.next() {
-                    Some(Ok(op)) => check_travel(&op, &session.letters, &session.travel, path)
-                        .and_then(|()| check_positioning(&op, &session, path))
-                        .map_err(RunError::Program)
-                        .map(|()| {
-                            // A positioning axis moves between exact stops, so the path
-                            // comes to rest before and after its block.
-                            let isolate = moves_positioning_axis(&op, &session);
-                            if isolate {
-                                queue.push_back(exact_stop(op.loc));
-                            }
-                            let loc = op.loc;
-                            queue.push_back(op);
-                            if isolate {
-                                queue.push_back(exact_stop(loc));
-                            }
-                        }),
-                    Some(Err(d)) => Err(RunError::Program(d)),
-                    None => {
-                        planner.finish();
-                        input_done = true;
-                        Ok(())
-                    }
-                };
-                if let Err(e) = next {
-                    // Let the motion of the blocks before finish, then report.
-                    pending_error = Some(e);
-                    planner.finish();
-                    input_done = true;
-                }
+                continue;
             }
-            match planner.next_step() {
+            let next = match self.interp.next() {
+                Some(Ok(op)) => check_travel(&op, &self.letters, &self.travel, self.path)
+                    .and_then(|()| check_positioning(&op, self, self.path))
+                    .map_err(RunError::Program)
+                    .map(|()| {
+                        // A positioning axis moves between exact stops, so the path comes
+                        // to rest before and after its block.
+                        let isolate = moves_positioning_axis(&op, self);
+                        if isolate {
+                            self.queue.push_back(exact_stop(op.loc));
+                        }
+                        let loc = op.loc;
+                        self.queue.push_back(op);
+                        if isolate {
+                            self.queue.push_back(exact_stop(loc));
+                        }
+                    }),
+                Some(Err(d)) => Err(RunError::Program(d)),
                 None => {
-                    session.settle_all()?;
-                    break;
+                    self.planner.finish();
+                    self.input_done = true;
+                    Ok(())
                 }
-                Some(Step::Sample(sample)) => session.apply_sample(&sample)?,
-                Some(Step::Event(op)) => session.handle_event(&op)?,
+            };
+            if let Err(e) = next {
+                self.stop_reading(e);
             }
         }
-        Ok(())
-    });
-    session.report.blocks = interp.blocks_executed();
-    let disabled = session.io.disable();
-    let mut report = session.report;
-    let trace_done = match session.trace {
-        Some(t) => t.finish(),
-        None => Ok(()),
-    };
-    report.realtime = report.realtime || options.realtime;
-    match (outcome, pending_error) {
-        (Err(e), _) | (Ok(()), Some(e)) => Err(fail(e, &report)),
-        (Ok(()), None) => {
-            disabled.map_err(|e| fail(e.into(), &report))?;
-            trace_done.map_err(|e| fail(e.into(), &report))?;
-            Ok(report)
-        }
+    }
+
+    /// An error found while reading ahead: the motion of the blocks before it finishes, then
+    /// the run reports it.
+    fn stop_reading(&mut self, error: RunError) {
+        self.pending_error = Some(error);
+        self.planner.finish();
+        self.input_done = true;
     }
 }
 
@@ -464,7 +594,7 @@ fn exact_stop(loc: SourceLoc) -> Op {
 }
 
 /// True when a motion op moves a positioning-only axis.
-fn moves_positioning_axis(op: &Op, session: &Session<'_, '_>) -> bool {
+fn moves_positioning_axis(op: &Op, session: &Run<'_, '_>) -> bool {
     let Some((lo, hi)) = crate::bounds::op_bounds(&op.kind) else {
         return false;
     };
@@ -491,7 +621,7 @@ fn block_diagnostic(path: &Path, loc: SourceLoc, message: String) -> Diagnostic 
 
 /// Refuses a motion op that moves a positioning-only axis together with another axis: such an
 /// axis follows its own profile behind a slow link and cannot keep to a shared path.
-fn check_positioning(op: &Op, session: &Session<'_, '_>, path: &Path) -> Result<(), Diagnostic> {
+fn check_positioning(op: &Op, session: &Run<'_, '_>, path: &Path) -> Result<(), Diagnostic> {
     let Some((lo, hi)) = crate::bounds::op_bounds(&op.kind) else {
         return Ok(());
     };
