@@ -1,4 +1,12 @@
-//! TNC DIN/ISO (`.i`) programs: recognised by [`crate::detect_dialect`], not executed yet.
+//! TNC DIN/ISO (`.i`) programs: block syntax, the mapping onto the Klartext machine, and the
+//! streaming runner with labels, subprogram calls and jumps.
 //!
-//! The interpreter reports "dialect not supported yet" for these files; the ISO lexer,
-//! parser and executor will live in this module next to the Klartext ones.
+//! ISO blocks are translated into the Klartext statements with the same meaning and executed
+//! by the Klartext machine, so an ISO program and its Klartext twin yield the same op stream.
+
+pub(crate) mod block;
+pub(crate) mod dfunc;
+pub(crate) mod exec;
+pub(crate) mod run;
+
+pub use run::{MAX_CALL_DEPTH, MAX_IDLE_JUMPS};

@@ -1,10 +1,13 @@
 //! Kinematics: the mapping between program poses (tool tip in program axes) and machine axis
-//! positions. Implementations: [`Cartesian`] (mills whose axes are the program axes). Lathe
-//! (X programmed as a diameter) and 5-axis head/table kinematics implement the same trait.
+//! positions. Implementations: [`Cartesian`] (mills whose axes are the program axes) and
+//! [`Lathe`] (X radius, Z, C, Y, B; C turns face points onto X on lathes without Y). 5-axis
+//! head/table kinematics implement the same trait.
 
 pub mod cartesian;
+pub mod lathe;
 
 pub use cartesian::Cartesian;
+pub use lathe::Lathe;
 
 use klar_interp::{AxisLetter, Pose};
 

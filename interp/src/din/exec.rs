@@ -1,0 +1,544 @@
+//! Executes the blocks of a MACHINING section: technology words, tool calls, M functions,
+//! motion and cycles.
+//!
+//! A block's words are grouped by G code: each G takes the words that follow it up to the
+//! next G (`T7 G197 S1200 G195 F0.2 M104`: S belongs to G197, F to G195); words before the
+//! first G are the modal ones (axis words of the modal motion G, F, S). T and M words act
+//! wherever they stand. M functions: M3/M4 main spindle, M103/M104 driven tool clockwise /
+//! counter-clockwise, M8 coolant, M14 C axis on act at block start; M5, M105, M9, M15 (C
+//! axis off) at block end; M0/M1 stop, M30/M2 end after the motion.
+//!
+//! Technology: G94 F mm/min, G95 F mm/rev (default), G96 S m/min, G97 S rpm, G26 S speed
+//! limit (recorded), G197 S driven tool rpm, G195 F mm per driven-tool revolution (turned
+//! into mm/s with the G197 speed), G14 Q0–Q4 moves to the tool change point (0 both axes
+//! together, 1 X then Z, 2 Z then X, 3 X only, 4 Z only), G110 C turns the C axis at rapid,
+//! G4 F dwells F seconds, G40/G41/G42 radius compensation, G890 finishes the FINISHED PART
+//! contour (NS/NE: first and last contour block).
+
+use std::collections::{HashMap, VecDeque};
+
+use super::block::DinWord;
+use super::contour::Contour;
+use super::cycles::{self, FacePattern};
+use super::lathe::{FeedUnit, Group, Lathe, TOOL_CHANGE_POINT, err_at, groups, num};
+use crate::diag::ProgramError;
+use crate::klartext::exec::ExecError;
+use crate::op::{
+    AxisLetter, CompSide, Feed, Op, OpKind, Pose, SourceLoc, SpindleDir, SpindleSpeed,
+};
+
+/// What happens after a block.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum DinFlow {
+    /// Next block.
+    Continue,
+    /// M30/M2: the program ends.
+    End,
+}
+
+/// The lathe with its tool list and the pattern waiting for its cycle.
+#[derive(Debug)]
+pub(crate) struct DinExec {
+    /// Modal lathe state.
+    pub lathe: Lathe,
+    /// Tool IDs from the TURRET section.
+    pub tools: HashMap<u32, String>,
+    /// A G745 pattern waiting for the cycle of the next block.
+    pub pending: Option<FacePattern>,
+    /// The FINISHED PART contour.
+    pub contour: Contour,
+}
+
+const CYCLES: [u32; 4] = [71, 74, 36, 791];
+
+fn whole(w: &DinWord, what: &str) -> Result<u32, ExecError> {
+    let v = num(w)?;
+    if v >= 0.0 && v.fract() == 0.0 && v <= f64::from(u32::MAX) {
+        Ok(v as u32)
+    } else {
+        Err(err_at(
+            w,
+            ProgramError::OutOfRange(format!("{what} needs a whole number")),
+        ))
+    }
+}
+
+/// M functions of one block sorted by when they act.
+#[derive(Debug, Default)]
+struct MSet {
+    main: Option<SpindleDir>,
+    driven: Option<SpindleDir>,
+    coolant_on: bool,
+    c_on: bool,
+    main_off: bool,
+    driven_off: bool,
+    coolant_off: bool,
+    c_off: bool,
+    stop: bool,
+    optional: bool,
+    end: bool,
+}
+
+impl MSet {
+    fn read(words: &[DinWord]) -> Result<MSet, ExecError> {
+        let mut m = MSet::default();
+        for w in words.iter().filter(|w| w.addr == "M") {
+            match whole(w, "M")? {
+                0 => m.stop = true,
+                1 => m.optional = true,
+                2 | 30 => m.end = true,
+                3 => m.main = Some(SpindleDir::Cw),
+                4 => m.main = Some(SpindleDir::Ccw),
+                5 => m.main_off = true,
+                8 => m.coolant_on = true,
+                9 => m.coolant_off = true,
+                14 => m.c_on = true,
+                15 => m.c_off = true,
+                103 => m.driven = Some(SpindleDir::Cw),
+                104 => m.driven = Some(SpindleDir::Ccw),
+                105 => m.driven_off = true,
+                other => return Err(err_at(w, ProgramError::UnsupportedM(other))),
+            }
+        }
+        Ok(m)
+    }
+}
+
+impl DinExec {
+    /// A lathe at `start`.
+    pub fn new(start: Pose) -> Self {
+        DinExec {
+            lathe: Lathe::new(start),
+            tools: HashMap::new(),
+            pending: None,
+            contour: Contour::new(),
+        }
+    }
+
+    /// Ops that end the program: spindles and coolant off, then End.
+    pub fn end_ops(&mut self, loc: SourceLoc, out: &mut VecDeque<Op>) {
+        let l = &mut self.lathe;
+        if l.main_dir != SpindleDir::Off {
+            l.main_dir = SpindleDir::Off;
+            out.push_back(Op {
+                kind: l.main_spindle_op(),
+                loc,
+            });
+        }
+        if l.driven_dir != SpindleDir::Off {
+            l.driven_dir = SpindleDir::Off;
+            out.push_back(Op {
+                kind: l.driven_op(),
+                loc,
+            });
+        }
+        if l.coolant {
+            l.coolant = false;
+            out.push_back(Op {
+                kind: OpKind::Coolant { on: false },
+                loc,
+            });
+        }
+        out.push_back(Op {
+            kind: OpKind::End,
+            loc,
+        });
+    }
+
+    /// Runs one MACHINING block; on error the block's ops are dropped.
+    pub fn block(
+        &mut self,
+        words: &[DinWord],
+        number: Option<u64>,
+        loc: SourceLoc,
+        out: &mut VecDeque<Op>,
+    ) -> Result<DinFlow, ExecError> {
+        let mark = out.len();
+        let r = self.block_inner(words, number, loc, out);
+        if r.is_err() {
+            out.truncate(mark);
+        }
+        r
+    }
+
+    fn block_inner(
+        &mut self,
+        words: &[DinWord],
+        number: Option<u64>,
+        loc: SourceLoc,
+        out: &mut VecDeque<Op>,
+    ) -> Result<DinFlow, ExecError> {
+        let gs = groups(words)?;
+        let has_cycle = gs.iter().any(|g| g.g.is_some_and(|n| CYCLES.contains(&n)));
+        if let Some(p) = self.pending.take_if(|_| !has_cycle) {
+            let msg = format!(
+                "{} has no ZE, so the next block must be a drilling or milling cycle \
+                 (G71, G74, G36, G791)",
+                cycles::pattern_block(&p)
+            );
+            return Err((None, ProgramError::Geometry(msg)));
+        }
+        let ms = MSet::read(words)?;
+        let emit = |out: &mut VecDeque<Op>, kind: OpKind| out.push_back(Op { kind, loc });
+        // block start: spindles, coolant, C axis
+        if let Some(d) = ms.main {
+            self.lathe.main_dir = d;
+            emit(out, self.lathe.main_spindle_op());
+        }
+        if ms.c_on {
+            self.lathe.c_axis = true;
+            emit(out, OpKind::CAxis { on: true });
+        }
+        if ms.coolant_on {
+            self.lathe.coolant = true;
+            emit(out, OpKind::Coolant { on: true });
+        }
+        for w in words.iter().filter(|w| w.addr == "T") {
+            let t = whole(w, "T")?;
+            emit(
+                out,
+                OpKind::ToolChange {
+                    tool: t,
+                    name: self.tools.get(&t).cloned(),
+                    axis: AxisLetter::Y,
+                    length: 0.0,
+                    radius: 0.0,
+                },
+            );
+        }
+        for g in &gs {
+            self.group(g, number, loc, out)?;
+        }
+        // the driven tool starts after its speed is known (G197 may stand in this block)
+        if let Some(d) = ms.driven {
+            self.lathe.driven_dir = d;
+            emit(out, self.lathe.driven_op());
+        }
+        if ms.main_off {
+            self.lathe.main_dir = SpindleDir::Off;
+            emit(out, self.lathe.main_spindle_op());
+        }
+        if ms.driven_off {
+            self.lathe.driven_dir = SpindleDir::Off;
+            emit(out, self.lathe.driven_op());
+        }
+        if ms.coolant_off {
+            self.lathe.coolant = false;
+            emit(out, OpKind::Coolant { on: false });
+        }
+        if ms.c_off {
+            self.lathe.c_axis = false;
+            emit(out, OpKind::CAxis { on: false });
+        }
+        if ms.end {
+            self.end_ops(loc, out);
+            return Ok(DinFlow::End);
+        }
+        if ms.stop {
+            emit(out, OpKind::Stop { optional: false });
+        } else if ms.optional {
+            emit(out, OpKind::Stop { optional: true });
+        }
+        Ok(DinFlow::Continue)
+    }
+
+    fn check_words(g: &Group<'_>, allowed: &[&str], name: &'static str) -> Result<(), ExecError> {
+        for w in g.words {
+            if w.addr == "M" || w.addr == "T" || allowed.contains(&w.addr.as_str()) {
+                continue;
+            }
+            return Err(err_at(
+                w,
+                ProgramError::UnknownWord {
+                    word: w.addr.clone(),
+                    block: name,
+                },
+            ));
+        }
+        Ok(())
+    }
+
+    fn group(
+        &mut self,
+        g: &Group<'_>,
+        number: Option<u64>,
+        loc: SourceLoc,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        const AXES: [&str; 9] = ["X", "Xi", "Z", "Zi", "C", "Ci", "Y", "Yi", "B"];
+        let params: Option<(&[&str], &'static str)> = match g.g {
+            Some(4) => Some((&["F"], "G4")),
+            Some(14) => Some((&["Q"], "G14")),
+            Some(26 | 96 | 97 | 197) => Some((&["S"], "speed")),
+            Some(94 | 95 | 195) => Some((&["F"], "feed")),
+            Some(18 | 40..=42) => Some((&[], "G18/G40/G41/G42")),
+            Some(110) => Some((&["C"], "G110")),
+            Some(745) => Some((
+                &[
+                    "XK", "YK", "X", "C", "K", "A", "W", "Wi", "Q", "V", "ZS", "ZE", "F",
+                ],
+                "G745",
+            )),
+            Some(71 | 36) => Some((&["Z", "ZS", "ZE", "F"], "G71/G36")),
+            Some(74) => Some((&["Z", "ZS", "ZE", "P", "I", "B", "J", "F"], "G74")),
+            Some(791) => Some((&["K", "A", "Z", "ZS", "ZE", "P", "F"], "G791")),
+            _ => None,
+        };
+        if let Some((allowed, name)) = params {
+            Self::check_words(g, allowed, name)?;
+        }
+        let l = &mut self.lathe;
+        let gpos = g.g_word.map(|w| w.pos as u32);
+        match g.g {
+            None => {
+                Self::check_words(g, &[&AXES[..], &["F", "S"]].concat(), "DIN")?;
+                if let Some(f) = g.get("F") {
+                    l.set_feed(num(f)?, f)?;
+                }
+                if let Some(s) = g.get("S") {
+                    let v = num(s)?;
+                    l.main_speed = match l.main_speed {
+                        SpindleSpeed::SurfaceSpeed(_) => SpindleSpeed::SurfaceSpeed(v),
+                        SpindleSpeed::Rpm(_) => SpindleSpeed::Rpm(v),
+                    };
+                    if l.main_dir != SpindleDir::Off {
+                        out.push_back(Op {
+                            kind: l.main_spindle_op(),
+                            loc,
+                        });
+                    }
+                }
+                if g.words.iter().any(|w| AXES.contains(&w.addr.as_str())) {
+                    let motion = l.motion.ok_or((
+                        None,
+                        ProgramError::Missing("no motion G code (G0, G1, G2, …) programmed yet"),
+                    ))?;
+                    self.motion(g, motion, loc, out)?;
+                }
+            }
+            Some(code @ (0 | 1 | 2 | 3 | 12 | 13)) => {
+                Self::check_words(
+                    g,
+                    &[&AXES[..], &["F", "S", "I", "K", "R"]].concat(),
+                    "G0/G1/G2/G3/G12/G13",
+                )?;
+                if let Some(f) = g.get("F") {
+                    l.set_feed(num(f)?, f)?;
+                }
+                l.motion = Some(code);
+                self.motion(g, code, loc, out)?;
+            }
+            Some(4) => {
+                let f = g
+                    .value("F")?
+                    .ok_or((gpos, ProgramError::Missing("G4 needs the dwell time F")))?;
+                if !(f >= 0.0 && f.is_finite()) {
+                    return Err((gpos, ProgramError::OutOfRange(format!("dwell F{f}"))));
+                }
+                out.push_back(Op {
+                    kind: OpKind::Dwell { seconds: f },
+                    loc,
+                });
+            }
+            Some(14) => {
+                let q = g.value("Q")?.unwrap_or(0.0);
+                let (xd, z) = TOOL_CHANGE_POINT;
+                let mut x_first = l.pos;
+                x_first[AxisLetter::X] = xd / 2.0;
+                let mut z_first = l.pos;
+                z_first[AxisLetter::Z] = z;
+                let mut both = x_first;
+                both[AxisLetter::Z] = z;
+                if q.fract() != 0.0 {
+                    return Err((
+                        gpos,
+                        ProgramError::OutOfRange(format!("G14 Q{q}: expected 0 to 4")),
+                    ));
+                }
+                let path: &[Pose] = match q as i64 {
+                    0 => &[both],
+                    1 => &[x_first, both],
+                    2 => &[z_first, both],
+                    3 => &[x_first],
+                    4 => &[z_first],
+                    _ => {
+                        return Err((
+                            gpos,
+                            ProgramError::OutOfRange(format!("G14 Q{q}: expected 0 to 4")),
+                        ));
+                    }
+                };
+                for p in path {
+                    l.line(*p, Feed::Rapid, loc, out);
+                }
+            }
+            Some(18) => {}
+            Some(26) => l.speed_limit = g.value("S")?,
+            Some(side @ (40..=42)) => {
+                let side = match side {
+                    40 => CompSide::Off,
+                    41 => CompSide::Left,
+                    _ => CompSide::Right,
+                };
+                if side != l.comp {
+                    l.comp = side;
+                    out.push_back(Op {
+                        kind: OpKind::RadiusComp { side },
+                        loc,
+                    });
+                }
+            }
+            Some(unit @ (94 | 95 | 195)) => {
+                l.feed_unit = match unit {
+                    94 => FeedUnit::PerMinute,
+                    95 => FeedUnit::PerRevolution,
+                    _ => FeedUnit::DrivenPerRevolution,
+                };
+                if let Some(f) = g.get("F") {
+                    l.set_feed(num(f)?, f)?;
+                }
+            }
+            Some(mode @ (96 | 97)) => {
+                let s = g
+                    .value("S")?
+                    .ok_or((gpos, ProgramError::Missing("G96/G97 need the speed S")))?;
+                l.main_speed = if mode == 96 {
+                    SpindleSpeed::SurfaceSpeed(s)
+                } else {
+                    SpindleSpeed::Rpm(s)
+                };
+                if l.main_dir != SpindleDir::Off {
+                    out.push_back(Op {
+                        kind: l.main_spindle_op(),
+                        loc,
+                    });
+                }
+            }
+            Some(197) => {
+                let s = g
+                    .value("S")?
+                    .ok_or((gpos, ProgramError::Missing("G197 needs the speed S")))?;
+                l.driven_speed = s;
+                if let Some(f) = l.driven_feed
+                    && l.feed_unit == FeedUnit::DrivenPerRevolution
+                {
+                    l.feed = Some(Feed::Rate(f * s / 60.0));
+                }
+                if l.driven_dir != SpindleDir::Off {
+                    out.push_back(Op {
+                        kind: l.driven_op(),
+                        loc,
+                    });
+                }
+            }
+            Some(110) => {
+                let c = g
+                    .value("C")?
+                    .ok_or((gpos, ProgramError::Missing("G110 needs the angle C")))?;
+                if !l.c_axis {
+                    return Err((
+                        gpos,
+                        ProgramError::Missing("G110 needs the C axis switched on (M14)"),
+                    ));
+                }
+                let mut to = l.pos;
+                to[AxisLetter::C] = c;
+                l.line(to, Feed::Rapid, loc, out);
+            }
+            Some(745) => {
+                if !l.c_axis {
+                    return Err((
+                        gpos,
+                        ProgramError::Missing("a face pattern needs the C axis switched on (M14)"),
+                    ));
+                }
+                let pattern = cycles::g745(g, number)?;
+                if pattern.ze.is_some() {
+                    let call = cycles::cycle_call(l, g, 71, Some(&pattern))?;
+                    let clearance = l.pos[AxisLetter::Z];
+                    for p in &pattern.points {
+                        cycles::run_at(l, &call, Some(*p), clearance, loc, out);
+                    }
+                } else {
+                    self.pending = Some(pattern);
+                }
+            }
+            Some(code @ (71 | 74 | 36 | 791)) => {
+                let pattern = self.pending.take();
+                let call = cycles::cycle_call(l, g, code, pattern.as_ref())?;
+                let clearance = l.pos[AxisLetter::Z];
+                match pattern {
+                    Some(p) => {
+                        for pt in &p.points {
+                            cycles::run_at(l, &call, Some(*pt), clearance, loc, out);
+                        }
+                    }
+                    None => cycles::run_at(l, &call, None, clearance, loc, out),
+                }
+            }
+            Some(890) => {
+                let block_of = |addr: &str| -> Result<Option<u64>, ExecError> {
+                    match g.get(addr) {
+                        None => Ok(None),
+                        Some(w) => whole(w, addr).map(|n| Some(u64::from(n))),
+                    }
+                };
+                let (ns, ne) = (block_of("NS")?, block_of("NE")?);
+                Self::check_words(g, &["NS", "NE", "F"], "G890")?;
+                if let Some(f) = g.get("F") {
+                    l.set_feed(num(f)?, f)?;
+                }
+                let feed = l.need_feed().map_err(|(_, e)| (gpos, e))?;
+                self.contour
+                    .finish(l, ns, ne, feed, loc, out)
+                    .map_err(|e| (gpos, e))?;
+            }
+            Some(other) => {
+                let name = match other {
+                    743 | 744 => Some("G743/G744 linear patterns"),
+                    746 => Some("G746 lateral circular pattern"),
+                    793 | 792 | 794 | 797 | 798 => Some("contour milling cycles"),
+                    810 | 820 | 830 | 860 => Some("roughing and recessing cycles"),
+                    31 | 72 | 73 => Some("threading, boring and tapping cycles"),
+                    _ => None,
+                };
+                return Err((
+                    gpos,
+                    match name {
+                        Some(n) => ProgramError::NotSupported(n.into()),
+                        None => ProgramError::UnknownWord {
+                            word: format!("G{other}"),
+                            block: "MACHINING",
+                        },
+                    },
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn motion(
+        &mut self,
+        g: &Group<'_>,
+        code: u32,
+        loc: SourceLoc,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let l = &mut self.lathe;
+        match code {
+            0 => {
+                let to = l.target(g)?;
+                l.line(to, Feed::Rapid, loc, out);
+            }
+            1 => {
+                let to = l.target(g)?;
+                if to != l.pos {
+                    let f = l.need_feed()?;
+                    l.line(to, f, loc, out);
+                }
+            }
+            _ => l.arc(g, code, loc, out)?,
+        }
+        Ok(())
+    }
+}
