@@ -628,3 +628,53 @@ fn tangent_join_with_an_arc_end_inside_the_radius_tolerance_is_smooth() {
     let worst = worst_offset_error(&out, &g.contour(4..=6), r, |l| (4..=6).contains(&l));
     assert!(worst < 1e-3, "offset error {worst}");
 }
+
+#[test]
+fn transition_arc_cutting_back_into_an_arc_of_more_than_half_a_turn_is_refused() {
+    // RL inside a 197.84° arc of radius 4.9118 with a 4.907 tool (offset radius 0.0048),
+    // then a right turn of 121.34°: the tool rolling around the corner swings back into the
+    // arc's own contour. (Found by the random-contour property test.)
+    let (r, tool, sweep, turn) = (4.9118, 4.907, 197.84f64, 121.34f64);
+    let mut g = Prog::new(tool);
+    g.pos = p(0.0, -10.0);
+    g.comp(CompSide::Left);
+    g.l(0.0, 0.0); // 3
+    let arc = g.c([0.0, r], sweep, 0.0); // 4
+    let (x, y) = (g.pos[AxisLetter::X], g.pos[AxisLetter::Y]);
+    let heading = (sweep - turn).to_radians();
+    g.l(x + 3.0 * heading.cos(), y + 3.0 * heading.sin()); // 5
+
+    // Independently: the transition arc about the corner P, from the arc's offset end
+    // (towards the centre, at the tool radius from P) clockwise through the turn.
+    let start = (sweep - 90.0).to_radians() + std::f64::consts::PI;
+    let corner = Op {
+        kind: OpKind::Arc {
+            from: p(x + tool * start.cos(), y + tool * start.sin()),
+            to: p(x, y),
+            center: [x, y],
+            plane: klar_interp::Plane::XY,
+            sweep: -turn,
+            feed: F,
+        },
+        loc: at(0),
+    };
+    let own = g.contour(4..=4);
+    let closest = sample(&corner, 2000)
+        .iter()
+        .map(|q| contour_dist([q[AxisLetter::X], q[AxisLetter::Y]], &own))
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        closest < tool - 0.05,
+        "the construction itself gouges: {closest}"
+    );
+
+    match run(p(0.0, -10.0), g.ops).unwrap_err() {
+        CompError::Gouge {
+            blocks, distance, ..
+        } => {
+            assert_eq!(blocks.iter().map(|l| l.line).collect::<Vec<_>>(), vec![arc]);
+            assert!((distance - closest).abs() < 1e-6, "{distance} vs {closest}");
+        }
+        e => panic!("{e}"),
+    }
+}

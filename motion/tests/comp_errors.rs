@@ -325,3 +325,31 @@ proptest! {
         prop_assert!(worst < 1e-6, "offset error {}", worst);
     }
 }
+
+#[test]
+fn curves_without_compensation_pass_through_from_the_tool_position() {
+    let out = run(
+        p(10.0, 0.0),
+        vec![
+            arc_op(1, p(10.0, 0.0), p(-10.0, 0.0), [0.0, 0.0], 180.0),
+            spline_op(2, p(-10.0, 0.0), p(-5.0, 0.0)),
+        ],
+    )
+    .unwrap();
+    assert_continuous(p(10.0, 0.0), &out);
+    assert_eq!(motions(&out).len(), 2);
+    let e = refuse(
+        p(10.0, 0.0),
+        vec![arc_op(
+            1,
+            p(10.0, f64::NAN),
+            p(-10.0, 0.0),
+            [0.0, 0.0],
+            180.0,
+        )],
+    );
+    assert!(
+        matches!(e, CompError::CurveAfterCompensation { loc } if loc.line == 1),
+        "{e}"
+    );
+}

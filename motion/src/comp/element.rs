@@ -5,7 +5,9 @@
 //! the direction of travel for RL and on the right for RR. With the signed offset d (+R for
 //! RL, −R for RR) a line moves by d along its left normal; an arc keeps its centre and its
 //! radius becomes r − d for a counter-clockwise (DR+) arc and r + d for a clockwise (DR−) one.
-//! The axes outside the working plane (the tool axis of a helix, rotary axes) are untouched.
+//! The axes outside the working plane (the tool axis of a helix, rotary axes) are untouched:
+//! an element cut short at an inside corner still reaches its programmed values outside the
+//! plane at its (new) end, and transition arcs keep them constant.
 
 use super::error::CompError;
 use super::plane::{V2, project, with_point, wrap};

@@ -117,10 +117,12 @@ pub enum CompError {
         tool: f64,
     },
     /// The tool path of the first block comes closer than the tool radius to the programmed
-    /// contour of the second (found within the look-ahead window).
+    /// contour of the second (found within the look-ahead window); a single block when the
+    /// transition arc after an arc of more than half a turn cuts back into that arc.
     #[error("{}: contour violation — the tool path of the first block comes within {distance:.4} mm of the contour of the second (tool radius {tool} mm)", Blocks(blocks.clone()))]
     Gouge {
-        /// The block whose tool path intrudes, then the block whose contour it would cut.
+        /// The block whose tool path intrudes, then the block whose contour it would cut (one
+        /// block when both are the same).
         blocks: Vec<SourceLoc>,
         /// Smallest distance found, mm.
         distance: f64,

@@ -14,9 +14,9 @@ use std::f64::consts::TAU;
 pub const GOUGE_TOLERANCE: f64 = 1e-3;
 
 /// Coarse samples per full turn of an arc (at least [`MIN_SAMPLES`] per arc).
-const SAMPLES_PER_TURN: f64 = 72.0;
+const SAMPLES_PER_TURN: f64 = 32.0;
 /// Coarse samples of a line, and the least number per arc.
-const MIN_SAMPLES: usize = 16;
+const MIN_SAMPLES: usize = 8;
 /// Golden-section steps: the bracket shrinks to 0.618^40 ≈ 5e-9 of its width.
 const GOLDEN_STEPS: usize = 40;
 
@@ -82,28 +82,43 @@ impl PathPiece {
         }
     }
 
-    /// The smallest distance from this piece to a programmed element.
+    /// Path length of the piece.
+    fn length(&self) -> f64 {
+        match *self {
+            PathPiece::Line(a, b) => a.dist(b),
+            PathPiece::Arc(_, r, _, sweep) => r * sweep.abs(),
+        }
+    }
+
+    /// The smallest distance from this piece to a programmed element, where it is below
+    /// `limit`; otherwise some value at least `limit`.
     ///
     /// From a line to a segment the distance is convex along the line, so a golden-section
-    /// search over the whole piece finds it; otherwise the best of a coarse sampling is
-    /// refined the same way between its neighbours.
-    fn min_distance(&self, shape: &Shape) -> f64 {
+    /// search over the whole piece finds it. Otherwise the piece is sampled; the distance
+    /// changes no faster than the path length, so between two samples `Δs` apart it can dip
+    /// at most `Δs/2` below the lower one, and only the intervals where such a dip could
+    /// reach below `limit` are searched further.
+    fn min_distance(&self, shape: &Shape, limit: f64) -> f64 {
         let f = |u: f64| distance(self.at(u), shape);
         if let (PathPiece::Line(..), Shape::Line { .. }) = (self, shape) {
-            return golden(f, 0.0, 1.0).min(f(0.0)).min(f(1.0));
+            return golden(f, 0.0, 1.0, limit, self.length())
+                .min(f(0.0))
+                .min(f(1.0));
         }
         let n = self.samples();
-        let (mut best_i, mut best) = (0, f64::INFINITY);
-        for i in 0..=n {
-            let d = f(i as f64 / n as f64);
-            if d < best {
-                (best_i, best) = (i, d);
+        let half_gap = self.length() / n as f64 / 2.0;
+        let d: Vec<f64> = (0..=n).map(|i| f(i as f64 / n as f64)).collect();
+        let mut best = d.iter().copied().fold(f64::INFINITY, f64::min);
+        for (i, pair) in d.windows(2).enumerate() {
+            if let [d0, d1] = pair
+                && d0.min(*d1) - half_gap < limit
+            {
+                let lo = i as f64 / n as f64;
+                let hi = (i + 1) as f64 / n as f64;
+                best = best.min(golden(f, lo, hi, limit, self.length()));
             }
         }
-        let step = 1.0 / n as f64;
-        let lo = (best_i as f64 - 1.0).max(0.0) * step;
-        let hi = ((best_i + 1) as f64 * step).min(1.0);
-        best.min(golden(f, lo, hi))
+        best
     }
 }
 
@@ -127,12 +142,17 @@ fn shape_bounds(shape: &Shape) -> (V2, f64) {
     }
 }
 
-/// Golden-section search for the minimum of `f` on [lo, hi].
-fn golden(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64) -> f64 {
+/// Golden-section search for the minimum of `f` on [lo, hi] (parameters of a piece
+/// `length` mm long). Stops early once the bracket proves nothing in it is below `limit`
+/// (the distance changes no faster than the path length).
+fn golden(f: impl Fn(f64) -> f64, mut lo: f64, mut hi: f64, limit: f64, length: f64) -> f64 {
     let g = (5f64.sqrt() - 1.0) / 2.0;
     let (mut x1, mut x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
     let (mut f1, mut f2) = (f(x1), f(x2));
     for _ in 0..GOLDEN_STEPS {
+        if f1.min(f2) - (hi - lo) * length >= limit {
+            break;
+        }
         if f1 < f2 {
             hi = x2;
             (x2, f2) = (x1, f1);
@@ -190,7 +210,7 @@ pub fn intrusion(path: &[PathPiece], shape: &Shape, tool: f64) -> Option<f64> {
             let (pc, pr) = p.bounds();
             pc.dist(sc) - pr - sr < tool
         })
-        .map(|p| p.min_distance(shape))
+        .map(|p| p.min_distance(shape, tool - GOUGE_TOLERANCE))
         .fold(f64::INFINITY, f64::min);
     (d < tool - GOUGE_TOLERANCE).then_some(d)
 }

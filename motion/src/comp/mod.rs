@@ -18,10 +18,17 @@
 //! - Compensation takes effect with the first straight move in the working plane after RL/RR
 //!   (moves of the tool axis alone before it run as programmed; an arc there is refused).
 //!   That move goes from the uncompensated tool position to the first contour point, where
-//!   the tool arrives on the normal of the first contour element. The block with R0 after RL/RR leaves the same way:
-//!   the last element ends on its own normal, and the R0 move goes from there to its end
-//!   point. RL and RR cannot follow each other directly; R0 or DEP comes in between.
+//!   the tool arrives on the normal of the first contour element. The block with R0 after
+//!   RL/RR leaves the same way: the last element ends on its own normal, and the R0 move goes
+//!   from there to its end point. RL and RR cannot follow each other directly; R0 or DEP
+//!   comes in between. The tool may not change while compensation is on.
 //! - APPR/DEP are built on the compensated path (module `approach`).
+//! - The working plane is the one normal to the tool axis of the last tool change (XY until
+//!   then); arcs in other planes and spline blocks are refused while compensation is on.
+//!   Moves of the tool axis alone inside a compensated contour are made where the tool
+//!   stands at that corner.
+//!
+//! Not handled here: paraxial R+/R− and M97/M98, which no op carries yet.
 //!
 //! Streaming: an element's tool path is known once the next element is in (its end corner
 //! depends on it). Finished elements are then held back for [`DEFAULT_LOOKAHEAD`] further
@@ -146,7 +153,8 @@ impl Compensator {
     /// normal) and releases everything held.
     ///
     /// Fails when an APPR block was never followed by a contour element, or when the last
-    /// elements violate the contour.
+    /// elements violate the contour. After an earlier error, or a second time, it does
+    /// nothing.
     pub fn finish(&mut self) -> Result<(), CompError> {
         if self.failed || self.finished {
             self.finished = true;
@@ -295,10 +303,11 @@ impl Compensator {
                 self.release_all();
                 Ok(())
             }
-            OpKind::Spline { from, to, .. } => match self.state {
+            OpKind::Spline { to, .. } => match self.state {
                 State::Off => {
-                    self.curve_after(from, loc)?;
-                    self.pos = *to;
+                    let to = *to;
+                    let op = self.curve_after(op)?;
+                    self.pos = to;
                     self.pass(op);
                     Ok(())
                 }
@@ -327,8 +336,8 @@ impl Compensator {
                     let out = line(self.pos, to, feed, loc);
                     self.pos = to;
                     self.pass(out);
-                } else if let OpKind::Arc { from, to, .. } = op.kind {
-                    self.curve_after(&from, loc)?;
+                } else if let OpKind::Arc { to, .. } = op.kind {
+                    let op = self.curve_after(op)?;
                     self.pos = to;
                     self.pass(op);
                 }
@@ -497,12 +506,23 @@ impl Compensator {
         Ok(())
     }
 
-    /// An arc or spline with compensation off must start where the tool is.
-    fn curve_after(&self, from: &Pose, loc: SourceLoc) -> Result<(), CompError> {
-        if project(from, self.plane).dist(project(&self.pos, self.plane)) > CONTINUITY_TOLERANCE {
-            return Err(CompError::CurveAfterCompensation { loc });
+    /// An arc or spline with compensation off must start where the tool is (after R0 or DEP
+    /// the tool is off the programmed point); it is then made to start exactly there.
+    fn curve_after(&self, mut op: Op) -> Result<Op, CompError> {
+        let loc = op.loc;
+        if let OpKind::Arc { from, .. } | OpKind::Spline { from, .. } = &mut op.kind {
+            let off = from
+                .0
+                .iter()
+                .zip(&self.pos.0)
+                .map(|(a, b)| (a - b).abs())
+                .any(|d| d.is_nan() || d > CONTINUITY_TOLERANCE);
+            if off {
+                return Err(CompError::CurveAfterCompensation { loc });
+            }
+            *from = self.pos;
         }
-        Ok(())
+        Ok(op)
     }
 
     /// Puts a non-motion op (or off-plane move) in its place in the stream.
@@ -536,11 +556,24 @@ impl Compensator {
         } else {
             gouge::pieces(&ops, self.plane)
         };
-        // Its own element is at the tool radius by construction; the others are checked.
-        for (loc, shape) in self.recent.iter().filter(|(_, s)| *s != p.elem.shape) {
-            if let Some(distance) = gouge::intrusion(&path, shape, self.tool) {
+        // The offset of its own element lies at the tool radius from it by construction, but
+        // the transition arc after it is checked against it too (an arc of more than half a
+        // turn can wrap around into the tool's way).
+        let corner_path = match (p.corner, ops.last()) {
+            (Some(_), Some(last)) => gouge::pieces(std::slice::from_ref(last), self.plane),
+            _ => Vec::new(),
+        };
+        for (loc, shape) in &self.recent {
+            let own = *shape == p.elem.shape && *loc == p.elem.loc;
+            let checked = if own { &corner_path } else { &path };
+            if let Some(distance) = gouge::intrusion(checked, shape, self.tool) {
+                let blocks = if own {
+                    vec![*loc]
+                } else {
+                    vec![p.elem.loc, *loc]
+                };
                 return Err(CompError::Gouge {
-                    blocks: vec![p.elem.loc, *loc],
+                    blocks,
                     distance,
                     tool: self.tool,
                 });
