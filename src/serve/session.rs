@@ -1,0 +1,439 @@
+//! The machine thread behind the dashboard: owns the machine configuration and, while a
+//! program runs, the [`Run`]; takes [`Command`]s from the web side and publishes
+//! [`Snapshot`]s of the machine a few dozen times a second.
+//!
+//! A [`Run`] holds parts that must stay on one thread, so it is created and stepped here and
+//! never leaves this thread; the web side only talks to it through channels.
+
+use crate::config::MachineConfig;
+use crate::runtime::{Run, RunError, RunOptions, RunStatus};
+use klar_interp::AxisLetter;
+use serde::Serialize;
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+use tokio::sync::broadcast;
+
+/// Wall time between two published snapshots while a program runs.
+const PUBLISH_PERIOD: Duration = Duration::from_millis(40);
+
+/// Machine time between two points of the executed-path trail, s.
+const TRAIL_PERIOD: f64 = 0.005;
+
+/// What the operator asks of the machine.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    /// Makes `path` (shown as `name`) the program that [`Command::Start`] runs.
+    Load {
+        /// Name shown on the page.
+        name: String,
+        /// The program file.
+        path: PathBuf,
+    },
+    /// Runs the loaded program from its start (ignored while one runs).
+    Start,
+    /// Feed hold: brake along the path and wait.
+    Hold,
+    /// End a feed hold.
+    Resume,
+    /// Controlled stop: a feed hold, then the run ends.
+    Stop,
+    /// Feed override factor (0.0 to 1.5).
+    Override(f64),
+    /// Single block on or off: with it on, the machine holds as each new block begins.
+    SingleBlock(bool),
+}
+
+/// What the machine is doing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum MachineState {
+    /// No program running.
+    Idle,
+    /// A program is moving the axes.
+    Running,
+    /// A feed hold is active.
+    Held,
+    /// The last run ended at the program's end.
+    Finished,
+    /// The last run was stopped on request.
+    Stopped,
+    /// The last run ended with an axis or spindle fault.
+    Fault,
+    /// The last run ended with a program or machine error.
+    Error,
+}
+
+/// One picture of the machine for the page (serialised to JSON).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Snapshot {
+    /// Increases with every snapshot.
+    pub seq: u64,
+    /// Machine state.
+    pub state: MachineState,
+    /// Name of the loaded program.
+    pub program: Option<String>,
+    /// Machine time of the current run, s.
+    pub t: f64,
+    /// Program line being executed (1-based; 0 before the first motion).
+    pub line: u32,
+    /// Blocks executed.
+    pub blocks: u64,
+    /// Axis letters, in machine order.
+    pub letters: Vec<String>,
+    /// Commanded position per axis (mm or degrees).
+    pub commanded: Vec<f64>,
+    /// Measured position per axis.
+    pub actual: Vec<f64>,
+    /// Following error per axis.
+    pub following_error: Vec<f64>,
+    /// Commanded velocity per axis over the last servo cycle, per second.
+    pub velocity: Vec<f64>,
+    /// Commanded acceleration per axis over the last servo cycle, per second².
+    pub acceleration: Vec<f64>,
+    /// Path speed, mm/s.
+    pub path_speed: f64,
+    /// Feed override factor in force.
+    pub feed_override: f64,
+    /// Single block mode.
+    pub single_block: bool,
+    /// Spindle speed (rpm, signed) when the machine has a spindle.
+    pub spindle_rpm: Option<f64>,
+    /// The last fault or error message, if the last run ended with one.
+    pub message: Option<String>,
+    /// Executed tool positions (X, Y, Z) since the previous snapshot.
+    pub trail: Vec<[f64; 3]>,
+}
+
+/// The machine thread's side of the channels.
+pub struct MachineLoop {
+    config: MachineConfig,
+    commands: Receiver<Command>,
+    snapshots: broadcast::Sender<Snapshot>,
+    latest: Arc<Mutex<Snapshot>>,
+    snap: Snapshot,
+    program_path: Option<PathBuf>,
+    feed_override: f64,
+}
+
+/// Finite differences of the commanded positions, one servo cycle apart.
+struct Derivatives {
+    t: f64,
+    position: Vec<f64>,
+    velocity: Vec<f64>,
+    acceleration: Vec<f64>,
+}
+
+impl Derivatives {
+    fn new(n: usize) -> Self {
+        Self {
+            t: 0.0,
+            position: vec![0.0; n],
+            velocity: vec![0.0; n],
+            acceleration: vec![0.0; n],
+        }
+    }
+
+    /// Takes the commanded positions at time `t`; a step that did not advance time is
+    /// skipped.
+    fn update(&mut self, t: f64, commanded: &[f64], first: bool) {
+        let dt = t - self.t;
+        if first {
+            self.position = commanded.to_vec();
+            self.t = t;
+            return;
+        }
+        if dt <= 0.0 {
+            return;
+        }
+        for (i, &c) in commanded.iter().enumerate() {
+            let (Some(p), Some(v), Some(a)) = (
+                self.position.get_mut(i),
+                self.velocity.get_mut(i),
+                self.acceleration.get_mut(i),
+            ) else {
+                continue;
+            };
+            let nv = (c - *p) / dt;
+            *a = (nv - *v) / dt;
+            *v = nv;
+            *p = c;
+        }
+        self.t = t;
+    }
+}
+
+impl MachineLoop {
+    /// A machine loop for `config`; snapshots go to `snapshots` and `latest`.
+    pub fn new(
+        config: MachineConfig,
+        commands: Receiver<Command>,
+        snapshots: broadcast::Sender<Snapshot>,
+        latest: Arc<Mutex<Snapshot>>,
+    ) -> Self {
+        let snap = idle_snapshot(&config);
+        Self {
+            config,
+            commands,
+            snapshots,
+            latest,
+            snap,
+            program_path: None,
+            feed_override: 1.0,
+        }
+    }
+
+    /// Serves commands until every sender is gone.
+    pub fn run(mut self) {
+        self.publish();
+        loop {
+            match self.commands.recv_timeout(Duration::from_millis(500)) {
+                Ok(Command::Start) => self.run_program(),
+                Ok(other) => self.idle_command(other),
+                Err(RecvTimeoutError::Timeout) => self.publish(),
+                Err(RecvTimeoutError::Disconnected) => return,
+            }
+        }
+    }
+
+    fn idle_command(&mut self, command: Command) {
+        match command {
+            Command::Load { name, path } => {
+                self.snap.program = Some(name);
+                self.program_path = Some(path);
+                self.snap.state = MachineState::Idle;
+                self.snap.message = None;
+                self.snap.line = 0;
+            }
+            Command::Override(f) => {
+                if f.is_finite() {
+                    self.feed_override = f.clamp(0.0, 1.5);
+                    self.snap.feed_override = self.feed_override;
+                }
+            }
+            Command::SingleBlock(on) => self.snap.single_block = on,
+            Command::Start | Command::Hold | Command::Resume | Command::Stop => {}
+        }
+        self.publish();
+    }
+
+    fn publish(&mut self) {
+        self.snap.seq += 1;
+        if let Ok(mut l) = self.latest.lock() {
+            *l = self.snap.clone();
+        }
+        // No subscriber is not an error: nobody is watching.
+        let _ = self.snapshots.send(self.snap.clone());
+        self.snap.trail.clear();
+    }
+
+    /// Runs the loaded program on the wall clock until it ends, taking commands between
+    /// servo cycles.
+    fn run_program(&mut self) {
+        let Some(path) = self.program_path.clone() else {
+            self.snap.state = MachineState::Error;
+            self.snap.message = Some("no program loaded".into());
+            self.publish();
+            return;
+        };
+        let config = self.config.clone();
+        let options = RunOptions {
+            realtime: true,
+            trace: None,
+        };
+        self.snap.message = None;
+        self.snap.trail.clear();
+        let mut run = match Run::start(&path, &config, options) {
+            Ok(r) => r,
+            Err(f) => {
+                self.end_with(Some(f.error), &path);
+                return;
+            }
+        };
+        run.set_feed_override(self.feed_override);
+        tracing::info!(program = %path.display(), "run started");
+        let mut derivatives = Derivatives::new(run.letters().len());
+        let mut first = true;
+        let mut last_publish = Instant::now();
+        let mut last_trail_t = f64::NEG_INFINITY;
+        let mut last_line = 0u32;
+        let outcome = loop {
+            match self.commands.try_recv() {
+                Ok(c) => self.run_command(&mut run, c),
+                Err(TryRecvError::Empty) => {}
+                Err(TryRecvError::Disconnected) => run.request_stop(),
+            }
+            let stepped = run.step();
+            let status = run.status();
+            derivatives.update(status.t, &status.commanded, first);
+            first = false;
+            if self.snap.single_block && status.line != last_line && last_line != 0 {
+                run.hold();
+            }
+            last_line = status.line;
+            // Before the first servo cycle there is no measured position yet.
+            if status.t > 0.0 && status.t - last_trail_t >= TRAIL_PERIOD {
+                last_trail_t = status.t;
+                self.snap.trail.push(tool_point(&run, &status));
+            }
+            let done = !matches!(stepped, Ok(true));
+            if done || last_publish.elapsed() >= PUBLISH_PERIOD {
+                self.fill(&status, &derivatives, MachineState::Running);
+                if status.held {
+                    self.snap.state = MachineState::Held;
+                }
+                self.publish();
+                last_publish = Instant::now();
+            }
+            match stepped {
+                Ok(true) => {}
+                Ok(false) => break None,
+                Err(e) => break Some(e),
+            }
+        };
+        let (error, stop) = match run.finish(outcome) {
+            Ok(report) => (None, report.stop),
+            Err(f) => (Some(f.error), f.report.stop),
+        };
+        self.end_with(error, &path);
+        // How the safety monitor brought the machine to rest, under the fault message.
+        if let Some(stop) = stop
+            && matches!(self.snap.state, MachineState::Fault | MachineState::Error)
+        {
+            let line = stop.to_string();
+            self.snap.message = Some(match self.snap.message.take() {
+                Some(m) => format!("{m}\n{line}"),
+                None => line,
+            });
+            self.publish();
+        }
+    }
+
+    fn run_command(&mut self, run: &mut Run<'_, '_>, command: Command) {
+        match command {
+            Command::Hold => run.hold(),
+            Command::Resume => run.resume(),
+            Command::Stop => run.request_stop(),
+            Command::Override(f) => {
+                self.feed_override = run.set_feed_override(f);
+            }
+            Command::SingleBlock(on) => self.snap.single_block = on,
+            // Loading or starting while a program runs waits for the run to end.
+            Command::Load { .. } | Command::Start => {
+                tracing::warn!("ignored while a program runs: {command:?}");
+            }
+        }
+    }
+
+    fn fill(&mut self, status: &RunStatus, d: &Derivatives, state: MachineState) {
+        let s = &mut self.snap;
+        s.state = state;
+        s.t = status.t;
+        s.line = status.line;
+        s.blocks = status.blocks;
+        s.commanded.clone_from(&status.commanded);
+        s.actual.clone_from(&status.actual);
+        s.following_error.clone_from(&status.following_error);
+        s.velocity.clone_from(&d.velocity);
+        s.acceleration.clone_from(&d.acceleration);
+        s.path_speed = status.path_speed;
+        s.feed_override = status.feed_override;
+        s.spindle_rpm = status.spindle_rpm;
+    }
+
+    fn end_with(&mut self, error: Option<RunError>, path: &Path) {
+        let (state, message) = match &error {
+            None => (MachineState::Finished, None),
+            Some(RunError::Stopped { .. }) => (MachineState::Stopped, None),
+            Some(e @ (RunError::Fault { .. } | RunError::Spindle { .. })) => {
+                (MachineState::Fault, Some(e.to_string()))
+            }
+            Some(RunError::Syntax(diags)) => (
+                MachineState::Error,
+                Some(
+                    diags
+                        .iter()
+                        .map(|d| d.to_string())
+                        .collect::<Vec<_>>()
+                        .join("\n"),
+                ),
+            ),
+            Some(e) => (MachineState::Error, Some(e.to_string())),
+        };
+        match &message {
+            Some(m) => tracing::warn!(program = %path.display(), "run ended: {m}"),
+            None => tracing::info!(program = %path.display(), ?state, "run ended"),
+        }
+        self.snap.state = state;
+        self.snap.message = message;
+        self.snap.path_speed = 0.0;
+        self.snap.velocity.iter_mut().for_each(|v| *v = 0.0);
+        self.snap.acceleration.iter_mut().for_each(|v| *v = 0.0);
+        self.publish();
+    }
+}
+
+/// The tool position (X, Y, Z; 0 for an axis the machine lacks) from the measured positions.
+fn tool_point(run: &Run<'_, '_>, status: &RunStatus) -> [f64; 3] {
+    let mut p = [0.0; 3];
+    for (l, &v) in run.letters().iter().zip(&status.actual) {
+        match l {
+            AxisLetter::X => p[0] = v,
+            AxisLetter::Y => p[1] = v,
+            AxisLetter::Z => p[2] = v,
+            _ => {}
+        }
+    }
+    p
+}
+
+/// The snapshot of a machine at rest at its start positions.
+pub fn idle_snapshot(config: &MachineConfig) -> Snapshot {
+    let n = config.axes.len();
+    let start: Vec<f64> = config.axes.iter().map(|a| a.start).collect();
+    Snapshot {
+        seq: 0,
+        state: MachineState::Idle,
+        program: None,
+        t: 0.0,
+        line: 0,
+        blocks: 0,
+        letters: config.axes.iter().map(|a| a.letter.to_string()).collect(),
+        commanded: start.clone(),
+        actual: start,
+        following_error: vec![0.0; n],
+        velocity: vec![0.0; n],
+        acceleration: vec![0.0; n],
+        path_speed: 0.0,
+        feed_override: 1.0,
+        single_block: false,
+        spindle_rpm: None,
+        message: None,
+        trail: Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn derivatives_of_a_parabola_give_its_velocity_and_acceleration() {
+        // x(t) = 3 t², sampled every 1 ms: backward differences give v = 3(2t - dt),
+        // a = 6 exactly.
+        let dt = 0.001;
+        let mut d = Derivatives::new(1);
+        d.update(0.0, &[0.0], true);
+        for k in 1..=100 {
+            let t = k as f64 * dt;
+            d.update(t, &[3.0 * t * t], false);
+        }
+        let t = 0.1;
+        assert!((d.velocity[0] - 3.0 * (2.0 * t - dt)).abs() < 1e-9);
+        assert!((d.acceleration[0] - 6.0).abs() < 1e-6);
+        // A step that does not advance time changes nothing.
+        d.update(t, &[100.0], false);
+        assert!((d.acceleration[0] - 6.0).abs() < 1e-6);
+    }
+}
