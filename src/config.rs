@@ -10,6 +10,7 @@ use klar_drivers::modbus::{ModbusServoConfig, ModbusVfdConfig};
 use klar_drivers::stepdir::StepDirConfig;
 use klar_interp::AxisLetter;
 use klar_motion::AxisLimits;
+use klar_motion::kinematics::{Cartesian, Kinematics, Lathe};
 use klar_sim::plant::SimAxisParams;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -113,6 +114,10 @@ pub struct AxisConfig {
     /// Position at start of a simulated run (defaults to 0).
     #[serde(default)]
     pub start: f64,
+    /// The control's following-error monitor: largest tolerated |commanded − measured|
+    /// (mm or degrees) before the run stops; none: only the drive's own window applies.
+    #[serde(default)]
+    pub following_error_limit: Option<f64>,
     /// The backend.
     #[serde(default)]
     pub backend: BackendConfig,
@@ -125,6 +130,9 @@ pub enum KinematicsConfig {
     /// Each machine axis is the program axis of the same letter.
     #[default]
     Cartesian,
+    /// A turning centre: X (radius), Z, C main spindle, Y, B tool tilt; without a Y axis a
+    /// point off the X axis is reached by turning C.
+    Lathe,
 }
 
 /// A spindle motor simulated inside klar: its speed ramps at `acceleration`.
@@ -237,6 +245,31 @@ pub struct MachineConfig {
     /// CANopen buses by name; their drives come from the axes (and spindle) naming them.
     #[serde(default)]
     pub canopen: BTreeMap<String, CanOpenConfig>,
+    /// Run the test run (`klar check --machine`) before every run and refuse to start a
+    /// program it refuses (default true). Tests of run-time reactions switch it off.
+    #[serde(default = "default_true")]
+    pub check_before_run: bool,
+    /// The tool table: when present, a TOOL CALL of a tool not listed is an error.
+    #[serde(default, rename = "tool")]
+    pub tools: Option<Vec<ToolConfig>>,
+    /// Faults injected into the simulated axes (see docs/safety.md).
+    #[serde(default, rename = "fault")]
+    pub faults: Vec<crate::faults::FaultConfig>,
+}
+
+fn default_true() -> bool {
+    true
+}
+
+/// One entry of the machine's tool table.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ToolConfig {
+    /// Tool number as TOOL CALL names it.
+    pub number: u32,
+    /// Tool name, for reports.
+    #[serde(default)]
+    pub name: Option<String>,
 }
 
 /// What can be wrong with a machine file.
@@ -271,6 +304,9 @@ pub enum ConfigError {
 /// The built-in simulated 3-axis mill as TOML (also the reference example of the format).
 pub const BUILTIN_MILL: &str = include_str!("../machines/mill.toml");
 
+/// The built-in simulated turning centre (X Z C Y B), used for lathe DIN programs.
+pub const BUILTIN_LATHE: &str = include_str!("../machines/lathe.toml");
+
 impl MachineConfig {
     /// Reads and validates a machine file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
@@ -301,6 +337,39 @@ impl MachineConfig {
             Ok(c) => c,
             // The built-in file is part of the binary and covered by a test.
             Err(e) => unreachable!("built-in machine is invalid: {e}"),
+        }
+    }
+
+    /// The built-in simulated lathe.
+    pub fn builtin_lathe() -> Self {
+        match Self::parse("built-in lathe", BUILTIN_LATHE) {
+            Ok(c) => c,
+            // The built-in file is part of the binary and covered by a test.
+            Err(e) => unreachable!("built-in machine is invalid: {e}"),
+        }
+    }
+
+    /// The built-in machine for a program: the lathe for lathe DIN programs, else the mill.
+    pub fn builtin_for(program: &Path) -> Self {
+        let head = std::fs::File::open(program)
+            .and_then(|f| {
+                use std::io::Read;
+                let mut buf = Vec::with_capacity(4096);
+                f.take(4096).read_to_end(&mut buf).map(|_| buf)
+            })
+            .unwrap_or_default();
+        match klar_interp::detect_dialect(program, &head) {
+            Some(klar_interp::Dialect::LatheDin) => Self::builtin_lathe(),
+            _ => Self::builtin_mill(),
+        }
+    }
+
+    /// The kinematics this machine names, over its axes in machine order.
+    pub fn kinematics(&self) -> Box<dyn Kinematics> {
+        let letters = self.letters();
+        match self.kinematics {
+            KinematicsConfig::Cartesian => Box::new(Cartesian::new(&letters)),
+            KinematicsConfig::Lathe => Box::new(Lathe::new(&letters)),
         }
     }
 
@@ -356,11 +425,28 @@ impl MachineConfig {
                 }
                 _ => {}
             }
+            if let Some(fe) = a.following_error_limit {
+                positive(&format!("axis {l}: following_error_limit"), fe)?;
+            }
             if !(a.start >= lo && a.start <= hi) {
                 return Err(format!(
                     "axis {l}: start {} is outside travel [{lo}, {hi}]",
                     a.start
                 ));
+            }
+        }
+        for f in &self.faults {
+            if !(f.at.is_finite() && f.at >= 0.0) {
+                return Err(format!("fault {:?}: at must be seconds >= 0", f.kind));
+            }
+            match f.axis {
+                Some(l) if !self.axes.iter().any(|a| a.letter == l) => {
+                    return Err(format!("fault {:?}: no axis {l} on this machine", f.kind));
+                }
+                None if f.kind != crate::faults::FaultKind::Estop => {
+                    return Err(format!("fault {:?} at {} s needs an axis", f.kind, f.at));
+                }
+                _ => {}
             }
         }
         if let Some(s) = &self.spindle {

@@ -79,6 +79,8 @@ pub struct MachineIo {
     slot_setpoints: Vec<Setpoint>,
     slot_feedback: Vec<AxisFeedback>,
     spindle: Option<Spindle>,
+    /// The simulated axes (for fault injection and inspection), if any.
+    sim: Option<crate::faults::SimAxes>,
     /// Simulated devices and buses running beside the backends (kept alive, dropped last).
     _companions: Vec<Box<dyn Any>>,
 }
@@ -255,13 +257,20 @@ impl MachineIo {
                 }
             }
         }
+        let mut sim = None;
         if !sim_axes.is_empty() {
             let backend = SimBackend::try_new(sim_axes, period)
                 .map_err(|e| open_err("simulated axes", &e))?;
+            let letters = sim_index
+                .iter()
+                .filter_map(|&i| config.axes.get(i).map(|a| a.letter))
+                .collect();
+            let shared = crate::faults::SimAxes::new(backend, sim_index.clone(), letters);
             slots.push(BackendSlot {
-                backend: Box::new(backend),
+                backend: Box::new(shared.backend()),
                 axes: sim_index,
             });
+            sim = Some(shared);
         }
         if let Some(SpindleBackendConfig::Canopen(c)) = config.spindle.as_ref().map(|s| &s.backend)
         {
@@ -337,6 +346,7 @@ impl MachineIo {
             slot_setpoints: Vec::with_capacity(n),
             slot_feedback: Vec::with_capacity(n),
             spindle,
+            sim,
             _companions: companions,
         })
     }
@@ -384,6 +394,39 @@ impl MachineIo {
             s.last = s.backend.cycle(t)?;
         }
         Ok(())
+    }
+
+    /// The simulated axes, for fault injection and inspection (None without sim axes).
+    pub fn sim_axes(&self) -> Option<&crate::faults::SimAxes> {
+        self.sim.as_ref()
+    }
+
+    /// The backend slot serving a machine axis and the axis's index within it.
+    fn slot_of(&mut self, axis: usize) -> Result<(&mut BackendSlot, usize), BackendError> {
+        self.slots
+            .iter_mut()
+            .find_map(|s| {
+                let k = s.axes.iter().position(|&i| i == axis)?;
+                Some((s, k))
+            })
+            .ok_or(BackendError::NoSuchAxis(axis))
+    }
+
+    /// Clears the fault of one machine axis if its cause is gone.
+    pub fn reset_fault(&mut self, axis: usize) -> Result<(), BackendError> {
+        let (slot, k) = self.slot_of(axis)?;
+        slot.backend.reset_fault(k)
+    }
+
+    /// Starts the homing sequence of one machine axis.
+    pub fn start_homing(&mut self, axis: usize) -> Result<(), BackendError> {
+        let (slot, k) = self.slot_of(axis)?;
+        slot.backend.start_homing(k)
+    }
+
+    /// Setpoints of the last (or next) cycle, one per machine axis.
+    pub fn setpoints(&self) -> &[Setpoint] {
+        &self.setpoints
     }
 
     /// Setpoints of the next cycle, one per machine axis.

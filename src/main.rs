@@ -2,16 +2,23 @@
 
 use clap::{Parser, Subcommand};
 use klar::config::MachineConfig;
-use klar::runtime::{RunError, RunOptions, run_program};
+use klar::runtime::{RunError, RunOptions};
 use klar_interp::{Diagnostic, Interpreter, Pose};
+use klar_motion::comp::Compensator;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+
+mod progress;
+mod render;
 
 /// klar — a CNC control for HEIDENHAIN programs.
 #[derive(Parser)]
 #[command(version, about)]
 struct Cli {
+    /// Print only errors: no progress bar, no run summary, no "ok".
+    #[arg(short, long, global = true)]
+    quiet: bool,
     #[command(subcommand)]
     command: Command,
 }
@@ -19,6 +26,8 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Check a program without moving anything: prints `file:line:col: message` per error.
+    /// With `--machine`, the full test run against that machine (soft limits, feeds,
+    /// spindle, tools, planner), which `klar run` also does before it starts.
     Check {
         /// The program file.
         program: PathBuf,
@@ -39,9 +48,17 @@ enum Command {
         /// Run the servo loop on the wall clock.
         #[arg(long)]
         realtime: bool,
+        /// Inject a fault into the simulated axes: KIND[:AXIS]@SECONDS with KIND one of
+        /// drive, comm, noise, stuck, limit, estop (e.g. `drive:X@0.5`, `estop@1.2`).
+        #[arg(long = "fault", value_name = "SPEC")]
+        faults: Vec<klar::faults::FaultConfig>,
     },
     /// Draw the toolpath (working plane and isometric view) as SVG or PNG.
     Plot {
+        /// Add path speed and per-axis velocity, acceleration and jerk over time from a
+        /// simulated run.
+        #[arg(long)]
+        profile: bool,
         /// The program file.
         program: PathBuf,
         /// Output file, .svg or .png.
@@ -51,6 +68,24 @@ enum Command {
         #[arg(long)]
         machine: Option<PathBuf>,
     },
+    /// Serve the lab-bench dashboard (program, DRO, toolpath, controls) in a web browser.
+    Serve {
+        /// Machine description (TOML); the built-in mill when absent.
+        #[arg(long)]
+        machine: Option<PathBuf>,
+        /// Folder of programs the page offers (.h, .i, .nc, also one folder down).
+        #[arg(long, default_value = "programs")]
+        programs: PathBuf,
+        /// Port to listen on (0 picks a free one).
+        #[arg(long, default_value_t = 8080)]
+        port: u16,
+        /// Address to listen on; anything but loopback needs --token.
+        #[arg(long, default_value = "127.0.0.1")]
+        listen: std::net::IpAddr,
+        /// Access token every API call must carry (`?token=` or `Authorization: Bearer`).
+        #[arg(long, env = "KLAR_TOKEN")]
+        token: Option<String>,
+    },
     /// Print the canonical op stream, one JSON object per line.
     Ops {
         /// The program file.
@@ -58,6 +93,9 @@ enum Command {
         /// Machine description (TOML), for the start position.
         #[arg(long)]
         machine: Option<PathBuf>,
+        /// Print the tool-centre path after radius compensation (RL/RR, APPR/DEP resolved).
+        #[arg(long)]
+        compensated: bool,
     },
 }
 
@@ -70,32 +108,55 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .init();
     let cli = Cli::parse();
+    let quiet = cli.quiet;
     match cli.command {
-        Command::Check { program, machine } => cmd_check(&program, machine.as_deref()),
+        Command::Check { program, machine } => cmd_check(&program, machine.as_deref(), quiet),
         Command::Run {
             program,
             machine,
             trace,
             realtime,
-        } => cmd_run(&program, machine.as_deref(), trace.as_deref(), realtime),
-        Command::Ops { program, machine } => cmd_ops(&program, machine.as_deref()),
+            faults,
+        } => cmd_run(
+            &program,
+            machine.as_deref(),
+            trace.as_deref(),
+            realtime,
+            faults,
+            quiet,
+        ),
+        Command::Ops {
+            program,
+            machine,
+            compensated,
+        } => cmd_ops(&program, machine.as_deref(), compensated),
+        Command::Serve {
+            machine,
+            programs,
+            port,
+            listen,
+            token,
+        } => cmd_serve(
+            machine.as_deref(),
+            programs,
+            std::net::SocketAddr::new(listen, port),
+            token,
+        ),
         Command::Plot {
             program,
             output,
             machine,
-        } => {
-            let config = match load_machine(machine.as_deref()) {
-                Ok(c) => c,
-                Err(code) => return code,
-            };
-            match klar::plot::plot_program(&program, start_pose(&config), &output) {
-                Ok(()) => ExitCode::SUCCESS,
-                Err(e) => {
-                    eprintln!("{e}");
-                    ExitCode::FAILURE
-                }
-            }
-        }
+            profile,
+        } => cmd_plot(&program, &output, machine.as_deref(), profile),
+    }
+}
+
+/// The machine file given, or the built-in machine for `program` (the lathe for lathe DIN
+/// programs, the mill otherwise).
+fn load_machine_for(program: &Path, machine: Option<&Path>) -> Result<MachineConfig, ExitCode> {
+    match machine {
+        None => Ok(MachineConfig::builtin_for(program)),
+        Some(_) => load_machine(machine),
     }
 }
 
@@ -118,19 +179,22 @@ fn start_pose(config: &MachineConfig) -> Pose {
 }
 
 fn print_diagnostics(diags: &[Diagnostic]) {
-    for d in diags {
-        eprintln!("{d}");
-    }
+    render::print(diags);
 }
 
-fn cmd_check(program: &Path, machine: Option<&Path>) -> ExitCode {
-    let config = match load_machine(machine) {
+fn cmd_check(program: &Path, machine: Option<&Path>, quiet: bool) -> ExitCode {
+    let config = match load_machine_for(program, machine) {
         Ok(c) => c,
         Err(code) => return code,
     };
+    if machine.is_some() {
+        return cmd_test_run(program, &config);
+    }
     let diags = klar_interp::check(program, start_pose(&config));
     if diags.is_empty() {
-        println!("{}: ok", program.display());
+        if !quiet {
+            println!("{}: ok", program.display());
+        }
         ExitCode::SUCCESS
     } else {
         print_diagnostics(&diags);
@@ -138,8 +202,8 @@ fn cmd_check(program: &Path, machine: Option<&Path>) -> ExitCode {
     }
 }
 
-fn cmd_ops(program: &Path, machine: Option<&Path>) -> ExitCode {
-    let config = match load_machine(machine) {
+fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCode {
+    let config = match load_machine_for(program, machine) {
         Ok(c) => c,
         Err(code) => return code,
     };
@@ -147,7 +211,8 @@ fn cmd_ops(program: &Path, machine: Option<&Path>) -> ExitCode {
         print_diagnostics(&diags);
         return ExitCode::FAILURE;
     }
-    let interp = match Interpreter::open(program, start_pose(&config)) {
+    let start = start_pose(&config);
+    let interp = match Interpreter::open(program, start) {
         Ok(i) => i,
         Err(d) => {
             print_diagnostics(&[d]);
@@ -156,23 +221,52 @@ fn cmd_ops(program: &Path, machine: Option<&Path>) -> ExitCode {
     };
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
+    let mut comp = compensated.then(|| Compensator::new(start));
+    let mut write = |op: &klar_interp::Op| -> bool {
+        match serde_json::to_string(op) {
+            Ok(line) => writeln!(out, "{line}").is_ok(),
+            Err(e) => {
+                eprintln!("cannot encode op: {e}");
+                false
+            }
+        }
+    };
+    let comp_failed = |e: &dyn std::fmt::Display| {
+        eprintln!("{}: {e}", program.display());
+        ExitCode::FAILURE
+    };
     for item in interp {
-        match item {
-            Ok(op) => {
-                let line = match serde_json::to_string(&op) {
-                    Ok(l) => l,
-                    Err(e) => {
-                        eprintln!("cannot encode op: {e}");
-                        return ExitCode::FAILURE;
-                    }
-                };
-                if writeln!(out, "{line}").is_err() {
+        let op = match item {
+            Ok(op) => op,
+            Err(d) => {
+                print_diagnostics(&[d]);
+                return ExitCode::FAILURE;
+            }
+        };
+        match comp.as_mut() {
+            None => {
+                if !write(&op) {
                     return ExitCode::FAILURE;
                 }
             }
-            Err(d) => {
-                let _ = out.flush();
-                print_diagnostics(&[d]);
+            Some(c) => {
+                if let Err(e) = c.push(op) {
+                    return comp_failed(&e);
+                }
+                while let Some(o) = c.pop() {
+                    if !write(&o) {
+                        return ExitCode::FAILURE;
+                    }
+                }
+            }
+        }
+    }
+    if let Some(c) = comp.as_mut() {
+        if let Err(e) = c.finish() {
+            return comp_failed(&e);
+        }
+        while let Some(o) = c.pop() {
+            if !write(&o) {
                 return ExitCode::FAILURE;
             }
         }
@@ -183,16 +277,45 @@ fn cmd_ops(program: &Path, machine: Option<&Path>) -> ExitCode {
     ExitCode::SUCCESS
 }
 
+/// `klar check PROGRAM --machine FILE`: the test run.
+fn cmd_test_run(program: &Path, config: &MachineConfig) -> ExitCode {
+    let report = klar::testrun::test_run(program, config);
+    print_diagnostics(&report.errors);
+    for w in &report.warnings {
+        eprintln!("{w} (warning)");
+    }
+    for u in &report.undecided {
+        eprintln!("{}: not checked: {u}", program.display());
+    }
+    if !report.passed() {
+        return ExitCode::FAILURE;
+    }
+    println!(
+        "{}: ok on {} ({} moves, {:.3} s planned)",
+        program.display(),
+        config.name,
+        report.motion_ops,
+        report.planned_time
+    );
+    for (l, lo, hi) in &report.envelope {
+        println!("  {l}: {lo:.4} .. {hi:.4}");
+    }
+    ExitCode::SUCCESS
+}
+
 fn cmd_run(
     program: &Path,
     machine: Option<&Path>,
     trace: Option<&Path>,
     realtime: bool,
+    faults: Vec<klar::faults::FaultConfig>,
+    quiet: bool,
 ) -> ExitCode {
-    let config = match load_machine(machine) {
+    let mut config = match load_machine_for(program, machine) {
         Ok(c) => c,
         Err(code) => return code,
     };
+    config.faults.extend(faults);
     let mut trace_file = match trace {
         None => None,
         Some(p) => match std::fs::File::create(p) {
@@ -207,7 +330,7 @@ fn cmd_run(
         realtime,
         trace: trace_file.as_mut().map(|w| w as &mut dyn Write),
     };
-    let result = run_program(program, &config, options);
+    let result = progress::run_with_progress(program, &config, options, quiet);
     let (report, error) = match result {
         Ok(r) => (r, None),
         Err(f) => (f.report, Some(f.error)),
@@ -219,24 +342,111 @@ fn cmd_run(
             other => eprintln!("{}: {other}", program.display()),
         }
     }
-    println!("machine:      {}", config.name);
-    println!("machine time: {:.3} s", report.machine_time);
-    println!("blocks:       {}", report.blocks);
-    println!("servo cycles: {}", report.cycles);
-    for (l, fe) in &report.max_following_error {
-        let unit = if l.is_rotary() { "deg" } else { "mm" };
-        println!("max following error {l}: {fe:.4} {unit}");
+    if let Some(stop) = &report.stop {
+        eprintln!("{}: {stop}", program.display());
+        for a in &stop.axes {
+            eprintln!(
+                "  axis {}: {:.3} units/s at the fault, stopped in {:.4}",
+                a.axis,
+                a.velocity,
+                a.stop_distance()
+            );
+        }
     }
-    if report.spindle_wait > 0.0 {
-        println!("spindle wait: {:.3} s", report.spindle_wait);
-    }
-    if report.realtime {
-        println!("underruns:    {}", report.underruns);
+    if !quiet {
+        println!("machine:      {}", config.name);
+        println!("machine time: {:.3} s", report.machine_time);
+        println!("blocks:       {}", report.blocks);
+        println!("servo cycles: {}", report.cycles);
+        for (l, fe) in &report.max_following_error {
+            let unit = if l.is_rotary() { "deg" } else { "mm" };
+            println!("max following error {l}: {fe:.4} {unit}");
+        }
+        if report.spindle_wait > 0.0 {
+            println!("spindle wait: {:.3} s", report.spindle_wait);
+        }
+        if report.realtime {
+            println!("underruns:    {}", report.underruns);
+        }
     }
     match error {
         None => ExitCode::SUCCESS,
         Some(e) => {
             eprintln!("stopped: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn cmd_serve(
+    machine: Option<&Path>,
+    programs: PathBuf,
+    listen: std::net::SocketAddr,
+    token: Option<String>,
+) -> ExitCode {
+    let config = match load_machine(machine) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let options = klar::serve::ServeOptions {
+        listen,
+        token: token.clone(),
+        programs,
+        machine: config,
+    };
+    let runtime = match tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .build()
+    {
+        Ok(r) => r,
+        Err(e) => {
+            eprintln!("cannot start the async runtime: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let served = runtime.block_on(klar::serve::serve(options, |addr| {
+        let query = if token.is_some() { "?token=…" } else { "" };
+        println!("klar dashboard on http://{addr}/{query}");
+        let _ = std::io::stdout().flush();
+    }));
+    match served {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("serve: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn cmd_plot(program: &Path, output: &Path, machine: Option<&Path>, profile: bool) -> ExitCode {
+    let config = match load_machine_for(program, machine) {
+        Ok(c) => c,
+        Err(code) => return code,
+    };
+    let profile = if profile {
+        match klar::plot::profile::profile(program, &config) {
+            Ok(p) => Some(p),
+            Err(klar::plot::PlotError::Program(diags)) => {
+                print_diagnostics(&diags);
+                return ExitCode::FAILURE;
+            }
+            Err(e) => {
+                eprintln!("{e}");
+                return ExitCode::FAILURE;
+            }
+        }
+    } else {
+        None
+    };
+    match klar::plot::plot_program_with(program, start_pose(&config), output, profile.as_ref()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(klar::plot::PlotError::Program(diags)) => {
+            print_diagnostics(&diags);
+            ExitCode::FAILURE
+        }
+        Err(e) => {
+            eprintln!("{e}");
             ExitCode::FAILURE
         }
     }

@@ -1,23 +1,37 @@
 //! The runtime: wires interpreter → planner → kinematics → backends for one program run,
 //! streams the trace, watches the feedback and reports.
 //!
-//! Error handling follows the program contract: a syntax error anywhere refuses the run before
-//! any axis moves; an error that shows only when a block is reached (geometry, a computed value,
-//! travel) lets the motion of the previous blocks finish — a controlled stop at the end of the
-//! previous block — and then reports the diagnostic. An axis fault stops the run at once: the
-//! commanded position is held and the axes are disabled (the path-keeping stop on faults
-//! belongs to the look-ahead planner).
+//! Error handling follows the program contract: the test run ([`crate::testrun`]) refuses a
+//! program with any error it can find before any axis moves (a syntax error always does); an
+//! error that shows only when a block is reached (geometry, a computed value, travel) lets the
+//! motion of the previous blocks finish — a controlled stop at the end of the previous block —
+//! and then reports the diagnostic.
+//!
+//! Monitors run every servo cycle ([`crate::monitor`]): a fault an axis reports (drive fault,
+//! limit switch, e-stop, lost link, its own following-error window), the control's own
+//! following-error limit per axis and a failing backend end the run with a quick stop — the
+//! faulted axes brake in their drives, every other axis stops on its own jerk-limited ramp,
+//! since the path cannot be kept when one axis no longer follows. A spindle fault leaves the
+//! axes able to follow, so it ends the run with a feed hold on the path. Either way the run
+//! reports the cause, the block and the axis ([`StopReport`]); after
+//! [`Run::reset_faults`] the control's position is read back from the drives.
 //!
 //! Spindle commands reach the spindle backend when their block is reached; after a command to
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
-use crate::config::{BackendConfig, MachineConfig};
+mod stop;
+
+use crate::config::MachineConfig;
 use crate::machine::{MachineError, MachineIo};
+use crate::monitor::{StopCause, StopReport};
+use crate::testrun::{
+    block_diagnostic, check_positioning, check_travel, moves_positioning_axis, positioning_axes,
+};
 use crate::trace::TraceWriter;
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
 use klar_interp::{AxisLetter, Diagnostic, Interpreter, Op, OpKind, SourceLoc};
-use klar_motion::kinematics::{Cartesian, Kinematics};
+use klar_motion::kinematics::Kinematics;
 use klar_motion::{
     AxisFault, BackendError, MotionError, Planner, PlannerConfig, Sample, Setpoint, Step,
 };
@@ -25,6 +39,7 @@ use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
+use stop::PendingStop;
 
 /// How to run.
 pub struct RunOptions<'a> {
@@ -51,22 +66,28 @@ pub struct RunReport {
     pub spindle_wait: f64,
     /// True when the run used the wall clock.
     pub realtime: bool,
+    /// How the run was stopped early by a fault or a request, if it was.
+    pub stop: Option<StopReport>,
 }
 
 /// Why a run did not complete.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
-    /// Syntax errors: nothing moved.
-    #[error("the program has {} error(s); nothing moved", .0.len())]
+    /// Errors found before motion (syntax, or anything the test run refuses): nothing moved.
+    #[error("the program has {} error(s); nothing moved{}", .0.len(), first_of(.0))]
     Syntax(Vec<Diagnostic>),
+    /// Axes without a reference on a machine that needs homing: nothing moved.
+    #[error("axes not homed: {}; home them first (nothing moved)", letters_list(.0))]
+    NotHomed(Vec<AxisLetter>),
     /// A run-time program error: motion stopped at the end of the previous block.
     #[error("{0}")]
     Program(Diagnostic),
     /// The planner refused an op.
     #[error("{0}")]
     Motion(#[from] MotionError),
-    /// An axis faulted.
-    #[error("axis {axis}: {fault} (at line {line})")]
+    /// An axis faulted (or the control's following-error monitor tripped on it): the
+    /// axes were brought to rest with a quick stop.
+    #[error("axis {axis}: {fault} (at {})", where_text(*line, *block))]
     Fault {
         /// The axis.
         axis: AxisLetter,
@@ -74,6 +95,8 @@ pub enum RunError {
         fault: AxisFault,
         /// Program line being executed.
         line: u32,
+        /// Block number being executed, if the block has one.
+        block: Option<u64>,
     },
     /// The spindle faulted or did not reach speed.
     #[error("spindle: {message} (at line {line})")]
@@ -117,7 +140,7 @@ pub struct Run<'a, 'w> {
     config: &'a MachineConfig,
     letters: Vec<AxisLetter>,
     travel: Vec<[f64; 2]>,
-    kin: Cartesian,
+    kin: Box<dyn Kinematics>,
     io: MachineIo,
     interp: Interpreter,
     planner: Planner,
@@ -144,6 +167,39 @@ pub struct Run<'a, 'w> {
     positioning: Vec<Option<(f64, f64)>>,
     /// Source of the last sample sent.
     last_loc: Option<SourceLoc>,
+    /// Per machine axis: (max acceleration, max jerk) for quick stops.
+    stop_limits: Vec<(f64, f64)>,
+    /// Per machine axis: the control's following-error limit.
+    fe_limits: Vec<Option<f64>>,
+    /// A stop on the path under way: its cause, axis and figures at the fault.
+    stopping: Option<PendingStop>,
+    /// The report of the stop that ended the run.
+    stop_report: Option<StopReport>,
+}
+
+/// `; the first: <diagnostic>` when there is one.
+fn first_of(diags: &[Diagnostic]) -> String {
+    diags
+        .first()
+        .map(|d| format!("; the first: {d}"))
+        .unwrap_or_default()
+}
+
+/// `A, B, C` for a list of letters.
+fn letters_list(letters: &[AxisLetter]) -> String {
+    letters
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `block N (line L)` or `line L`.
+fn where_text(line: u32, block: Option<u64>) -> String {
+    match block {
+        Some(b) => format!("block {b}, line {line}"),
+        None => format!("line {line}"),
+    }
 }
 
 impl Run<'_, '_> {
@@ -159,6 +215,48 @@ impl Run<'_, '_> {
             }
         }
         self.io.cycle(t)?;
+        self.record_cycle(t)?;
+        for (i, f) in self.io.feedback().iter().enumerate() {
+            if let Some(fault) = &f.fault {
+                return Err(RunError::Fault {
+                    axis: self.letters[i],
+                    fault: fault.clone(),
+                    line: self.line,
+                    block: self.last_loc.and_then(|l| l.block),
+                });
+            }
+            if let Some(limit) = self.fe_limits[i] {
+                let e = self.commanded[i] - self.actual[i];
+                if e.abs() > limit || e.is_nan() {
+                    return Err(RunError::Fault {
+                        axis: self.letters[i],
+                        fault: AxisFault::FollowingError(e),
+                        line: self.line,
+                        block: self.last_loc.and_then(|l| l.block),
+                    });
+                }
+            }
+        }
+        if self.stopping.is_none()
+            && let Some(s) = self.io.spindle_mut()
+            && let Some(fault) = s.feedback().fault.clone()
+        {
+            let message = fault.to_string();
+            tracing::error!(line = self.line, "spindle fault: {message}: feed hold");
+            self.begin_path_stop(
+                StopCause::Spindle(message.clone()),
+                None,
+                RunError::Spindle {
+                    message,
+                    line: self.line,
+                },
+            );
+        }
+        Ok(())
+    }
+
+    /// Bookkeeping after a cycle: time, measured positions, figures, trace row.
+    fn record_cycle(&mut self, t: f64) -> Result<(), RunError> {
         self.t = t;
         self.report.cycles += 1;
         self.report.machine_time = t;
@@ -168,21 +266,6 @@ impl Run<'_, '_> {
             if fe > self.report.max_following_error[i].1 {
                 self.report.max_following_error[i].1 = fe;
             }
-            if let Some(fault) = &f.fault {
-                return Err(RunError::Fault {
-                    axis: self.letters[i],
-                    fault: fault.clone(),
-                    line: self.line,
-                });
-            }
-        }
-        if let Some(s) = self.io.spindle_mut()
-            && let Some(fault) = &s.feedback().fault
-        {
-            return Err(RunError::Spindle {
-                message: fault.to_string(),
-                line: self.line,
-            });
         }
         if let Some(tr) = self.trace.as_mut() {
             tr.row(t, &self.commanded, &self.actual)?;
@@ -224,6 +307,7 @@ impl Run<'_, '_> {
                         axis: self.letters[axis],
                         fault: AxisFault::FollowingError(self.commanded[axis] - self.actual[axis]),
                         line: self.line,
+                        block: self.last_loc.and_then(|l| l.block),
                     });
                 }
                 self.hold_cycle()?;
@@ -315,6 +399,9 @@ impl Run<'_, '_> {
         let waited_from = self.t;
         loop {
             self.hold_cycle()?;
+            if let Some(pending) = self.stopping.take() {
+                return Err(self.end_path_stop(pending));
+            }
             let at_speed = self.io.spindle_mut().is_some_and(|s| s.feedback().at_speed);
             if at_speed {
                 break;
@@ -392,11 +479,28 @@ impl<'a, 'w> Run<'a, 'w> {
                 report: report.clone(),
             })
         };
-        if let Err(diags) = klar_interp::syntax_check(path) {
+        if config.check_before_run {
+            let checked = crate::testrun::test_run(path, config);
+            for w in &checked.warnings {
+                tracing::warn!("{w}");
+            }
+            if !checked.passed() {
+                return Err(fail(RunError::Syntax(checked.errors), &report));
+            }
+        } else if let Err(diags) = klar_interp::syntax_check(path) {
             return Err(fail(RunError::Syntax(diags), &report));
         }
-        let kin = Cartesian::new(&letters);
+        let kin = config.kinematics();
         let mut io = MachineIo::open(config).map_err(|e| fail(e.into(), &report))?;
+        if let Some(sim) = io.sim_axes() {
+            sim.schedule(&config.faults).map_err(|e| {
+                let e = MachineError::Open {
+                    what: "fault injection".into(),
+                    message: e.to_string(),
+                };
+                fail(e.into(), &report)
+            })?;
+        }
         let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
         let interp =
             Interpreter::open(path, start).map_err(|d| fail(RunError::Program(d), &report))?;
@@ -412,6 +516,31 @@ impl<'a, 'w> Run<'a, 'w> {
             None => None,
         };
         io.enable().map_err(|e| fail(e.into(), &report))?;
+        if !config.start_homed {
+            // One cycle holding the start position tells which axes have a reference.
+            let unhomed = io
+                .cycle(0.0)
+                .map(|()| {
+                    io.feedback()
+                        .iter()
+                        .zip(&letters)
+                        .filter(|(f, _)| !f.homed)
+                        .map(|(_, &l)| l)
+                        .collect::<Vec<_>>()
+                })
+                .map_err(|e| fail(e.into(), &report));
+            let refused = match unhomed {
+                Ok(u) if u.is_empty() => None,
+                Ok(u) => Some(fail(RunError::NotHomed(u), &report)),
+                Err(e) => Some(e),
+            };
+            if let Some(f) = refused {
+                if let Err(e) = io.disable() {
+                    tracing::warn!("disabling after a refused start: {e}");
+                }
+                return Err(f);
+            }
+        }
         let n = letters.len();
         Ok(Run {
             path,
@@ -434,15 +563,20 @@ impl<'a, 'w> Run<'a, 'w> {
             commanded: config.axes.iter().map(|a| a.start).collect(),
             actual: vec![0.0; n],
             warned_no_spindle: false,
-            positioning: config
+            positioning: positioning_axes(config),
+            last_loc: None,
+            stop_limits: config
                 .axes
                 .iter()
-                .map(|a| match &a.backend {
-                    BackendConfig::Modbus(m) => Some((m.in_position, m.settle_timeout)),
-                    _ => None,
-                })
+                .map(|a| (a.max_acceleration, a.max_jerk))
                 .collect(),
-            last_loc: None,
+            fe_limits: config
+                .axes
+                .iter()
+                .map(|a| a.following_error_limit)
+                .collect(),
+            stopping: None,
+            stop_report: None,
             letters,
         })
     }
@@ -450,17 +584,25 @@ impl<'a, 'w> Run<'a, 'w> {
     /// Advances the run by one planner step (a servo cycle or an event). Returns false once
     /// the program has ended (or a requested stop has come to rest).
     pub fn step(&mut self) -> Result<bool, RunError> {
-        self.feed_planner();
-        if self.stop_requested && self.planner.path_speed() == 0.0 {
+        if self.stop_report.is_some() {
             return Err(RunError::Stopped { line: self.line });
         }
-        match self.planner.next_step() {
-            None => {
-                self.settle_all()?;
-                Ok(false)
-            }
+        self.feed_planner();
+        if self.planner.path_speed() == 0.0
+            && let Some(pending) = self.stopping.take()
+        {
+            return Err(self.end_path_stop(pending));
+        }
+        let result = match self.planner.next_step() {
+            None => self.settle_all().map(|()| false),
             Some(Step::Sample(sample)) => self.apply_sample(&sample).map(|()| true),
+            // While stopping, events (spindle, stops) of blocks not reached are not executed.
+            Some(Step::Event(_)) if self.stopping.is_some() => Ok(true),
             Some(Step::Event(op)) => self.handle_event(&op).map(|()| true),
+        };
+        match result {
+            Err(e @ (RunError::Fault { .. } | RunError::Backend(_))) => Err(self.quick_stop(e)),
+            other => other,
         }
     }
 
@@ -482,8 +624,21 @@ impl<'a, 'w> Run<'a, 'w> {
     /// Stops the run in a controlled way: a feed hold, then the run ends at rest with
     /// [`RunError::Stopped`].
     pub fn request_stop(&mut self) {
-        self.stop_requested = true;
-        self.planner.hold();
+        if self.stopping.is_none() && !self.stop_requested {
+            self.stop_requested = true;
+            let line = self.line;
+            self.begin_path_stop(StopCause::Requested, None, RunError::Stopped { line });
+        }
+    }
+
+    /// The report of the stop that ended the run, once it is at rest.
+    pub fn stop_report(&self) -> Option<&StopReport> {
+        self.stop_report.as_ref()
+    }
+
+    /// The simulated axes of the machine (fault injection, inspection), if it has any.
+    pub fn sim_axes(&self) -> Option<&crate::faults::SimAxes> {
+        self.io.sim_axes()
     }
 
     /// A snapshot for displays.
@@ -549,12 +704,14 @@ impl<'a, 'w> Run<'a, 'w> {
             }
             let next = match self.interp.next() {
                 Some(Ok(op)) => check_travel(&op, &self.letters, &self.travel, self.path)
-                    .and_then(|()| check_positioning(&op, self, self.path))
+                    .and_then(|()| {
+                        check_positioning(&op, &self.letters, &self.positioning, self.path)
+                    })
                     .map_err(RunError::Program)
                     .map(|()| {
                         // A positioning axis moves between exact stops, so the path comes
                         // to rest before and after its block.
-                        let isolate = moves_positioning_axis(&op, self);
+                        let isolate = moves_positioning_axis(&op, &self.letters, &self.positioning);
                         if isolate {
                             self.queue.push_back(exact_stop(op.loc));
                         }
@@ -591,79 +748,4 @@ fn exact_stop(loc: SourceLoc) -> Op {
         kind: OpKind::ExactStop,
         loc,
     }
-}
-
-/// True when a motion op moves a positioning-only axis.
-fn moves_positioning_axis(op: &Op, session: &Run<'_, '_>) -> bool {
-    let Some((lo, hi)) = crate::bounds::op_bounds(&op.kind) else {
-        return false;
-    };
-    session
-        .letters
-        .iter()
-        .enumerate()
-        .any(|(i, l)| session.positioning[i].is_some() && hi[*l] - lo[*l] > 1e-12)
-}
-
-/// A diagnostic for the block at `loc`, its message prefixed with the block number.
-fn block_diagnostic(path: &Path, loc: SourceLoc, message: String) -> Diagnostic {
-    Diagnostic {
-        file: path.to_path_buf(),
-        line: loc.line,
-        col: loc.col,
-        block: loc.block,
-        message: match loc.block {
-            Some(n) => format!("block {n}: {message}"),
-            None => message,
-        },
-    }
-}
-
-/// Refuses a motion op that moves a positioning-only axis together with another axis: such an
-/// axis follows its own profile behind a slow link and cannot keep to a shared path.
-fn check_positioning(op: &Op, session: &Run<'_, '_>, path: &Path) -> Result<(), Diagnostic> {
-    let Some((lo, hi)) = crate::bounds::op_bounds(&op.kind) else {
-        return Ok(());
-    };
-    let moved: Vec<usize> = (0..9).filter(|&i| hi.0[i] - lo.0[i] > 1e-12).collect();
-    if moved.len() < 2 {
-        return Ok(());
-    }
-    for (i, &l) in session.letters.iter().enumerate() {
-        if session.positioning[i].is_some() && moved.contains(&l.index()) {
-            return Err(block_diagnostic(
-                path,
-                op.loc,
-                format!(
-                    "axis {l} is a positioning axis (Modbus): program it in a block of its own"
-                ),
-            ));
-        }
-    }
-    Ok(())
-}
-
-/// Refuses a motion op whose path leaves the travel of an axis, before it is planned.
-fn check_travel(
-    op: &Op,
-    letters: &[AxisLetter],
-    travel: &[[f64; 2]],
-    path: &Path,
-) -> Result<(), Diagnostic> {
-    let Some((lo, hi)) = crate::bounds::op_bounds(&op.kind) else {
-        return Ok(());
-    };
-    for (i, &l) in letters.iter().enumerate() {
-        let [min, max] = travel[i];
-        let (a, b) = (lo[l], hi[l]);
-        if a < min - 1e-9 || b > max + 1e-9 {
-            let v = if a < min - 1e-9 { a } else { b };
-            return Err(block_diagnostic(
-                path,
-                op.loc,
-                format!("axis {l} would move to {v:.4}, outside its travel [{min}, {max}]"),
-            ));
-        }
-    }
-    Ok(())
 }

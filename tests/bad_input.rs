@@ -57,7 +57,17 @@ fn a_geometry_error_stops_at_the_end_of_the_previous_block() {
     let text =
         format!("{GOOD_HEAD}3 L X+10 Y+0 F600\n4 CR X+50 Y+0 R+10 DR+\n5 L X+0\n6 END PGM T MM\n");
     let path = temp_program("chord.h", &text);
+    // The test run before the start refuses the program outright, nothing moves ...
     let (result, trace) = run(&path, &MachineConfig::builtin_mill());
+    match result.expect_err("the test run must refuse it").error {
+        RunError::Syntax(d) => assert_eq!((d[0].line, d[0].block), (5, Some(4)), "{d:?}"),
+        other => panic!("expected the test run's refusal, got {other}"),
+    }
+    assert!(trace.t.is_empty(), "axes moved before the refusal");
+    // ... and without it the run-time reaction shows: a stop at the end of block 3.
+    let mut unchecked = MachineConfig::builtin_mill();
+    unchecked.check_before_run = false;
+    let (result, trace) = run(&path, &unchecked);
     let failure = result.expect_err("the chord error must stop the run");
     match &failure.error {
         RunError::Program(d) => assert_eq!((d.line, d.block), (5, Some(4)), "{d}"),
@@ -82,6 +92,17 @@ fn travel_beyond_the_machine_is_refused_with_the_block() {
     let text = format!("{GOOD_HEAD}3 L X+900 F600\n4 END PGM T MM\n");
     let path = temp_program("travel.h", &text);
     let (result, trace) = run(&path, &MachineConfig::builtin_mill());
+    match result.expect_err("the test run must refuse it").error {
+        RunError::Syntax(d) => {
+            assert_eq!((d[0].line, d[0].block), (4, Some(3)));
+            assert!(d[0].message.contains("axis X"), "{d:?}");
+        }
+        other => panic!("expected the test run's refusal, got {other}"),
+    }
+    assert!(trace.t.is_empty(), "axes moved before the refusal");
+    let mut unchecked = MachineConfig::builtin_mill();
+    unchecked.check_before_run = false;
+    let (result, trace) = run(&path, &unchecked);
     let failure = result.expect_err("X+900 is outside the travel");
     match &failure.error {
         RunError::Program(d) => {

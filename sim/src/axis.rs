@@ -1,6 +1,7 @@
 //! Simulated axes behind the axis boundary trait: [`SimBackend`] runs one [`ServoPlant`]
 //! per axis, advancing each by the configured servo period every cycle.
 
+use crate::faults::{EncoderNoise, FaultSchedule, InjectedFault, ScheduledFault};
 use crate::plant::{PlantError, ServoPlant, SimAxisParams, SimParamsError};
 use klar_motion::{AxisBackend, AxisFault, AxisFeedback, BackendError, Setpoint};
 
@@ -38,6 +39,10 @@ pub struct SimBackend {
     servo_period: f64,
     /// A configuration error found by [`SimBackend::new`]: every request then fails with it.
     config_error: Option<SimBackendError>,
+    /// Injected faults waiting for their time.
+    schedule: FaultSchedule,
+    /// Per axis: the feedback frozen when its link was lost (`None` while the link is up).
+    link_lost: Vec<Option<AxisFeedback>>,
 }
 
 impl SimBackend {
@@ -51,13 +56,16 @@ impl SimBackend {
         if let Some(e) = &config_error {
             tracing::error!("simulated backend: {e}");
         }
+        let plants: Vec<ServoPlant> = axes
+            .into_iter()
+            .map(|(params, start)| ServoPlant::new(params, start))
+            .collect();
         Self {
-            plants: axes
-                .into_iter()
-                .map(|(params, start)| ServoPlant::new(params, start))
-                .collect(),
+            link_lost: vec![None; plants.len()],
+            plants,
             servo_period,
             config_error,
+            schedule: FaultSchedule::default(),
         }
     }
 
@@ -117,6 +125,66 @@ impl SimBackend {
         Ok(())
     }
 
+    /// Replaces the schedule of injected faults; each strikes at the start of the first cycle
+    /// whose time reaches it.
+    pub fn set_fault_schedule(&mut self, schedule: FaultSchedule) {
+        self.schedule = schedule;
+    }
+
+    /// Injects one fault now (see [`InjectedFault`] for what each does).
+    pub fn inject(&mut self, axis: usize, fault: &InjectedFault) -> Result<(), BackendError> {
+        if let InjectedFault::EStop = fault {
+            self.set_estop(true);
+            return Ok(());
+        }
+        let last = self.plant_checked(axis)?.feedback();
+        let plant = self.plant_checked(axis)?;
+        match fault {
+            InjectedFault::Drive { code } => {
+                plant.inject_fault(InjectedFault::drive_fault(*code));
+            }
+            InjectedFault::CommunicationLost => {
+                plant.inject_fault(AxisFault::CommunicationLost);
+                if let Some(slot) = self.link_lost.get_mut(axis) {
+                    *slot = Some(AxisFeedback {
+                        fault: Some(AxisFault::CommunicationLost),
+                        ..last
+                    });
+                }
+            }
+            InjectedFault::EncoderNoise { amplitude } => {
+                let seed = 0x5EED_0000 + axis as u64;
+                plant.set_encoder_noise(Some(EncoderNoise::new(*amplitude, seed)));
+            }
+            InjectedFault::Stuck => plant.set_stuck(true),
+            InjectedFault::LimitSwitch => {
+                let positive = plant.actual_velocity() >= 0.0;
+                plant.inject_fault(AxisFault::LimitSwitch { positive });
+            }
+            InjectedFault::EStop => {}
+        }
+        tracing::warn!(axis, fault = fault.name(), "sim: fault injected");
+        Ok(())
+    }
+
+    /// Removes the causes of injected faults on one axis (frees a jammed slide, quiets the
+    /// encoder, restores the link) so that [`AxisBackend::reset_fault`] can clear the fault.
+    /// The e-stop is released separately with [`SimBackend::set_estop`].
+    pub fn repair(&mut self, axis: usize) -> Result<(), BackendError> {
+        let plant = self.plant_checked(axis)?;
+        plant.set_stuck(false);
+        plant.set_encoder_noise(None);
+        if let Some(slot) = self.link_lost.get_mut(axis) {
+            *slot = None;
+        }
+        Ok(())
+    }
+
+    /// True while the link to `axis` is lost.
+    pub fn link_lost(&self, axis: usize) -> bool {
+        self.link_lost.get(axis).is_some_and(Option::is_some)
+    }
+
     /// The configuration error as a backend error, if any.
     fn check_config(&self) -> Result<(), BackendError> {
         match &self.config_error {
@@ -174,6 +242,11 @@ impl AxisBackend for SimBackend {
 
     fn reset_fault(&mut self, axis: usize) -> Result<(), BackendError> {
         self.check_config()?;
+        if self.link_lost(axis) {
+            return Err(BackendError::Communication(format!(
+                "axis {axis}: no link to the drive"
+            )));
+        }
         self.plant_checked(axis)?
             .reset_fault()
             .map_err(|e| refused(axis, e))
@@ -181,7 +254,7 @@ impl AxisBackend for SimBackend {
 
     fn cycle(
         &mut self,
-        _t: f64,
+        t: f64,
         setpoints: &[Setpoint],
         feedback: &mut [AxisFeedback],
     ) -> Result<(), BackendError> {
@@ -192,8 +265,23 @@ impl AxisBackend for SimBackend {
                 return Err(BackendError::AxisCount { expected, got });
             }
         }
-        for ((plant, setpoint), out) in self.plants.iter_mut().zip(setpoints).zip(feedback) {
-            *out = plant.step(*setpoint, self.servo_period);
+        for ScheduledFault { axis, fault, .. } in self.schedule.take_due(t) {
+            if let Err(e) = self.inject(axis, &fault) {
+                tracing::warn!("sim: scheduled fault not injected: {e}");
+            }
+        }
+        let period = self.servo_period;
+        for (((plant, setpoint), out), frozen) in self
+            .plants
+            .iter_mut()
+            .zip(setpoints)
+            .zip(feedback)
+            .zip(&self.link_lost)
+        {
+            let fresh = plant.step(*setpoint, period);
+            // Without a link the drive keeps running on its own, but the control only sees
+            // what it last received.
+            *out = frozen.clone().unwrap_or(fresh);
         }
         Ok(())
     }

@@ -128,6 +128,12 @@ pub struct ServoPlant {
     last_setpoint: f64,
     /// Drive force (N or N·m) applied during the last substep.
     force: f64,
+    /// Injected: the slide is jammed and does not move.
+    stuck: bool,
+    /// Injected: encoder noise generator.
+    noise: Option<crate::faults::EncoderNoise>,
+    /// Current encoder noise in counts (redrawn every substep).
+    noise_counts: i64,
 }
 
 impl ServoPlant {
@@ -164,6 +170,9 @@ impl ServoPlant {
             homing_settled_for: 0.0,
             last_setpoint: position,
             force: 0.0,
+            stuck: false,
+            noise: None,
+            noise_counts: 0,
         };
         if let Some(e) = &plant.invalid {
             tracing::error!("simulated axis: {e}");
@@ -337,6 +346,29 @@ impl ServoPlant {
         self.raise(fault);
     }
 
+    /// Fault injection: jams (`true`) or frees the slide. A jammed slide stands still
+    /// whatever the force, so a powered axis builds up following error.
+    pub fn set_stuck(&mut self, stuck: bool) {
+        self.stuck = stuck;
+        if stuck {
+            self.velocity = 0.0;
+        }
+    }
+
+    /// True while the slide is jammed.
+    pub fn is_stuck(&self) -> bool {
+        self.stuck
+    }
+
+    /// Fault injection: adds noise of up to `amplitude` counts to every encoder reading
+    /// (`None` removes it).
+    pub fn set_encoder_noise(&mut self, noise: Option<crate::faults::EncoderNoise>) {
+        self.noise = noise;
+        if self.noise.is_none() {
+            self.noise_counts = 0;
+        }
+    }
+
     /// Advances the plant by `dt` seconds (one servo cycle) following `setpoint`, the
     /// command for the end of the cycle, and reports the feedback at the end of the cycle.
     /// The setpoint is followed only while Enabled (ignored while Disabled, Homing or
@@ -433,6 +465,9 @@ impl ServoPlant {
     /// One control and integration substep of length `h` with command position `c`,
     /// commanded velocity `v_c` and acceleration `a_c` for the substep.
     fn substep(&mut self, c: f64, v_c: f64, a_c: f64, h: f64) {
+        if let Some(noise) = &mut self.noise {
+            self.noise_counts = noise.next_counts();
+        }
         let y = self.measured_position();
         let following = matches!(self.state, AxisState::Enabled | AxisState::Homing);
         if following {
@@ -504,6 +539,10 @@ impl ServoPlant {
 
     /// Integrates the mechanics over `h` with the drive force held constant.
     fn integrate(&mut self, force: f64, h: f64) {
+        if self.stuck {
+            self.velocity = 0.0;
+            return;
+        }
         let p = &self.params;
         let inertia = p.mass * self.si;
         let v = self.velocity;
@@ -642,7 +681,8 @@ impl ServoPlant {
     /// The referenced encoder reading for true position `x`.
     fn measured_at(&self, x: f64) -> f64 {
         let cpu = self.params.counts_per_unit;
-        let raw = count_of(x + self.params.unreferenced_offset, cpu);
+        let raw =
+            count_of(x + self.params.unreferenced_offset, cpu).saturating_add(self.noise_counts);
         (raw - self.reference_counts) as f64 / cpu
     }
 }

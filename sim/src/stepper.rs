@@ -65,7 +65,9 @@ pub struct SimPin {
 }
 
 /// A new motor and a function making its pins.
-pub fn stepper(switches: SwitchPositions) -> (Rc<RefCell<StepperMotor>>, impl Fn(PinRole) -> SimPin) {
+pub fn stepper(
+    switches: SwitchPositions,
+) -> (Rc<RefCell<StepperMotor>>, impl Fn(PinRole) -> SimPin) {
     let motor = Rc::new(RefCell::new(StepperMotor {
         switches,
         ..StepperMotor::default()
@@ -179,7 +181,10 @@ mod tests {
             pin(PinRole::Home),
         );
         motor.borrow_mut().steps = 4;
-        assert_eq!((neg.is_high(), pos.is_high(), home.is_high()), (Ok(false), Ok(false), Ok(true)));
+        assert_eq!(
+            (neg.is_high(), pos.is_high(), home.is_high()),
+            (Ok(false), Ok(false), Ok(true))
+        );
         motor.borrow_mut().steps = 10;
         assert_eq!(pos.is_high(), Ok(true));
         motor.borrow_mut().steps = -11;

@@ -1,0 +1,4 @@
+0 BEGIN PGM A MM
+1 L X+1 F100
+2 CALL PGM no_such_program.h
+3 END PGM A MM

@@ -1,0 +1,5 @@
+0 BEGIN PGM A MM
+1 Q1 = 0
+2 Q2 = 5 / Q1
+3 L X+Q2 F100
+4 END PGM A MM

@@ -1,0 +1,2 @@
+1 L X+10 F100
+2 END PGM A MM

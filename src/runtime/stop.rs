@@ -1,0 +1,255 @@
+//! The run's stop reactions: the quick stop when an axis can no longer follow the path, the
+//! stop on the path (feed hold) when it can, the stop report, and the fault reset that reads
+//! the position back from the drives.
+
+use super::{Run, RunError};
+use crate::monitor::{AxisStop, AxisStopFigures, StopCause, StopKind, StopReport};
+use klar_interp::AxisLetter;
+use klar_motion::{AxisFault, Setpoint};
+
+/// A feed-hold stop on the path that has begun but not yet come to rest.
+pub(super) struct PendingStop {
+    pub(super) report: StopReport,
+    pub(super) error: RunError,
+}
+
+/// Cycles the axes must stay still before a stop counts as at rest.
+const REST_CYCLES: u32 = 20;
+/// Largest movement per cycle that counts as still, mm or degrees.
+const REST_STEP: f64 = 2e-4;
+/// Longest a stop may take before the run gives up waiting, s.
+const STOP_TIMEOUT: f64 = 10.0;
+/// Longest the run waits for faulted axes (whose feedback may be stale or noisy) to show
+/// rest, s: their drives brake on their own.
+const FAULTED_WAIT: f64 = 1.0;
+
+impl Run<'_, '_> {
+    /// Figures of every axis at the moment a fault is seen (rest positions filled later).
+    pub(super) fn figures_now(&self) -> Vec<AxisStopFigures> {
+        let setpoints = self.io.setpoints();
+        self.letters
+            .iter()
+            .enumerate()
+            .map(|(i, &axis)| {
+                let sp = setpoints.get(i).copied().unwrap_or_default();
+                AxisStopFigures {
+                    axis,
+                    velocity: sp.velocity,
+                    acceleration: sp.acceleration,
+                    position_at_fault: self.actual[i],
+                    position_at_rest: self.actual[i],
+                    following_error: (self.commanded[i] - self.actual[i]).abs(),
+                }
+            })
+            .collect()
+    }
+
+    /// Starts a feed hold that ends the run with `error` once the path is at rest.
+    pub(super) fn begin_path_stop(
+        &mut self,
+        cause: StopCause,
+        axis: Option<AxisLetter>,
+        error: RunError,
+    ) {
+        self.planner.hold();
+        self.stopping = Some(PendingStop {
+            report: StopReport {
+                cause,
+                axis,
+                line: self.line,
+                block: self.last_loc.and_then(|l| l.block),
+                t_fault: self.t,
+                t_rest: self.t,
+                kind: StopKind::OnPath,
+                axes: self.figures_now(),
+            },
+            error,
+        });
+    }
+
+    /// Ends a path stop at rest: fills in the rest figures and returns its error.
+    pub(super) fn end_path_stop(&mut self, pending: PendingStop) -> RunError {
+        let mut report = pending.report;
+        report.t_rest = self.t;
+        for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
+            f.position_at_rest = x;
+        }
+        tracing::warn!("{report}");
+        self.report.stop = Some(report.clone());
+        self.stop_report = Some(report);
+        pending.error
+    }
+
+    /// The reaction to a fault the axes cannot ride through: every axis that still follows
+    /// stops on its own jerk-limited ramp from its last setpoint, faulted axes brake in their
+    /// drives; the cycles go on until everything is still. Returns the error to report.
+    pub(super) fn quick_stop(&mut self, error: RunError) -> RunError {
+        let (cause, axis) = match &error {
+            RunError::Fault { axis, fault, .. } => {
+                let monitor = self.io.feedback().iter().all(|f| f.fault.is_none());
+                let cause = match (fault, monitor) {
+                    (AxisFault::FollowingError(e), true) => StopCause::FollowingError {
+                        error: *e,
+                        limit: self
+                            .letters
+                            .iter()
+                            .position(|l| l == axis)
+                            .and_then(|i| self.fe_limits[i])
+                            .unwrap_or(f64::NAN),
+                    },
+                    _ => StopCause::AxisFault(fault.clone()),
+                };
+                (cause, Some(*axis))
+            }
+            RunError::Backend(e) => (StopCause::Communication(e.to_string()), None),
+            other => (StopCause::Program(other.to_string()), None),
+        };
+        tracing::error!(line = self.line, "{cause}: quick stop");
+        let mut report = StopReport {
+            cause,
+            axis,
+            line: self.line,
+            block: self.last_loc.and_then(|l| l.block),
+            t_fault: self.t,
+            t_rest: self.t,
+            kind: StopKind::Quick,
+            axes: self.figures_now(),
+        };
+        let period = self.config.servo_period;
+        let mut stops: Vec<AxisStop> = self
+            .io
+            .setpoints()
+            .iter()
+            .zip(&self.stop_limits)
+            .map(|(sp, &(a, j))| AxisStop::new(*sp, a, j))
+            .collect();
+        // Axes whose feedback cannot be trusted to show rest (faulted: their drives brake on
+        // their own; a lost link shows a stale position, a broken encoder noise) are waited
+        // for at most FAULTED_WAIT; the others must be still for REST_CYCLES.
+        let tripped = axis.and_then(|a| self.letters.iter().position(|&l| l == a));
+        let mut still = 0;
+        let mut still_faulted = 0;
+        let mut last = self.actual.clone();
+        let cycles = (STOP_TIMEOUT / period).ceil() as u64;
+        let t_fault = self.t;
+        for _ in 0..cycles {
+            for (i, (stop, sp)) in stops
+                .iter_mut()
+                .zip(self.io.setpoints_mut().iter_mut())
+                .enumerate()
+            {
+                *sp = stop.step(period);
+                self.commanded[i] = sp.position;
+            }
+            let t = self.t + period;
+            self.shift += period;
+            if let Err(e) = self.io.cycle(t) {
+                tracing::error!("quick stop: the backend no longer answers: {e}");
+                break;
+            }
+            if let Err(e) = self.record_cycle(t) {
+                tracing::warn!("quick stop: trace: {e}");
+            }
+            let (mut moved, mut moved_faulted) = (false, false);
+            for (i, (f, (a, b))) in self
+                .io
+                .feedback()
+                .iter()
+                .zip(self.actual.iter().zip(&last))
+                .enumerate()
+            {
+                let moving = (a - b).abs() > REST_STEP;
+                if f.fault.is_some() || Some(i) == tripped {
+                    moved_faulted |= moving;
+                } else {
+                    moved |= moving;
+                }
+            }
+            last.clone_from(&self.actual);
+            still_faulted = if moved_faulted { 0 } else { still_faulted + 1 };
+            if stops.iter().all(AxisStop::at_rest) && !moved {
+                still += 1;
+            } else {
+                still = 0;
+            }
+            let faulted_done = still_faulted >= REST_CYCLES || self.t - t_fault >= FAULTED_WAIT;
+            if still >= REST_CYCLES && faulted_done {
+                break;
+            }
+        }
+        report.t_rest = self.t;
+        for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
+            f.position_at_rest = x;
+        }
+        // At rest the drives are switched off: a faulted machine waits powerless for its
+        // reset (an axis the monitor tripped may still pull toward an unreachable command).
+        if let Err(e) = self.io.disable() {
+            tracing::warn!("quick stop: disabling the drives: {e}");
+        }
+        tracing::warn!("{report}");
+        self.report.stop = Some(report.clone());
+        self.stop_report = Some(report);
+        error
+    }
+
+    /// After a stop: clears the faults of every faulted axis (their causes must be gone),
+    /// reads the positions back from the drives and makes them the commanded positions, so
+    /// the control's idea of where the axes are is the drives' again. The axes are enabled
+    /// holding that position. The program does not go on: [`Run::finish`] ends the run.
+    pub fn reset_faults(&mut self) -> Result<(), RunError> {
+        let faulted: Vec<usize> = self
+            .io
+            .feedback()
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.fault.is_some())
+            .map(|(i, _)| i)
+            .collect();
+        for &i in &faulted {
+            self.io.reset_fault(i)?;
+        }
+        // Every axis is disabled now (the stop switched the drives off, the reset leaves the
+        // faulted ones off): one cycle reads their fresh positions (a lost link showed a stale
+        // one).
+        let period = self.config.servo_period;
+        for &i in &faulted {
+            if let (Some(sp), Some(f)) = (self.io.setpoints_mut().get_mut(i), self.actual.get(i)) {
+                sp.position = *f;
+            }
+        }
+        self.io.hold();
+        self.shift += period;
+        self.io.cycle(self.t + period)?;
+        self.record_cycle(self.t + period)?;
+        // The position the drives report becomes the command, then the axes are enabled
+        // holding it.
+        let measured: Vec<f64> = self.io.feedback().iter().map(|f| f.position).collect();
+        for (sp, &x) in self.io.setpoints_mut().iter_mut().zip(&measured) {
+            *sp = Setpoint {
+                position: x,
+                velocity: 0.0,
+                acceleration: 0.0,
+            };
+        }
+        self.commanded.clone_from(&measured);
+        self.io.enable()?;
+        self.shift += period;
+        self.io.cycle(self.t + period)?;
+        self.record_cycle(self.t + period)?;
+        let still_faulted = self
+            .io
+            .feedback()
+            .iter()
+            .zip(&self.letters)
+            .find_map(|(f, &l)| f.fault.clone().map(|fault| (l, fault)));
+        if let Some((axis, fault)) = still_faulted {
+            return Err(RunError::Fault {
+                axis,
+                fault,
+                line: self.line,
+                block: self.last_loc.and_then(|l| l.block),
+            });
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,432 @@
+//! The test run (`klar check PROGRAM --machine FILE`): executes the whole program against a
+//! machine without moving anything and reports every problem it can find before motion —
+//! interpreter errors anywhere in the program (each erroneous block is skipped and the check
+//! goes on), soft limits per axis with the block and the axis named, spindle speeds above the
+//! machine's, TOOL CALLs of tools missing from the machine's tool table, moves the planner
+//! refuses (contour and compensation violations), positioning axes programmed together with
+//! others, and feeds the axes cannot reach (a warning: the control limits them).
+//!
+//! What it cannot decide statically is listed too: after the first interpreter error the
+//! program's later positions depend on how the error is resolved, so the machine checks stop
+//! there; without a tool table, tool existence is not checked. `klar run` refuses to start a
+//! program the test run refuses (see [`crate::config::MachineConfig::check_before_run`]).
+
+use crate::bounds::op_bounds;
+use crate::config::{BackendConfig, MachineConfig};
+use klar_interp::op::{SpindleDir, SpindleSpeed};
+use klar_interp::{AxisLetter, Diagnostic, Feed, Interpreter, Op, OpKind, Pose, SourceLoc};
+use klar_motion::{Planner, PlannerConfig, Step};
+use std::path::Path;
+
+/// Slack on soft-limit comparisons, mm or degrees.
+const TRAVEL_SLACK: f64 = 1e-9;
+
+/// Longest planned machine time the test run simulates, s: beyond it the planner pass stops
+/// (the other checks go on) and says so.
+pub const MAX_PLANNED_TIME: f64 = 24.0 * 3600.0;
+
+/// What the test run found.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TestRunReport {
+    /// Problems that refuse the run, in program order per check.
+    pub errors: Vec<Diagnostic>,
+    /// Problems the control handles itself (feeds it limits); the run may start.
+    pub warnings: Vec<Diagnostic>,
+    /// What could not be decided before motion, in words.
+    pub undecided: Vec<String>,
+    /// Motion ops checked against the machine.
+    pub motion_ops: u64,
+    /// Planned machine time of the checked part of the program, s.
+    pub planned_time: f64,
+    /// Lowest and highest position per machine axis over the checked moves.
+    pub envelope: Vec<(AxisLetter, f64, f64)>,
+}
+
+impl TestRunReport {
+    /// True when the run may start.
+    pub fn passed(&self) -> bool {
+        self.errors.is_empty()
+    }
+}
+
+/// The start pose of a machine (program coordinates).
+pub fn start_pose(config: &MachineConfig) -> Pose {
+    let mut p = Pose::ZERO;
+    for a in &config.axes {
+        p[a.letter] = a.start;
+    }
+    p
+}
+
+/// Per machine axis: (in-position window, settle timeout) for positioning-only axes.
+pub(crate) fn positioning_axes(config: &MachineConfig) -> Vec<Option<(f64, f64)>> {
+    config
+        .axes
+        .iter()
+        .map(|a| match &a.backend {
+            BackendConfig::Modbus(m) => Some((m.in_position, m.settle_timeout)),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Runs the test run of the program at `path` on `config`.
+pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
+    let start = start_pose(config);
+    let mut report = TestRunReport {
+        errors: klar_interp::check(path, start),
+        envelope: config
+            .axes
+            .iter()
+            .map(|a| (a.letter, a.start, a.start))
+            .collect(),
+        ..TestRunReport::default()
+    };
+    let first_error_line = report.errors.first().map(|d| d.line);
+    let Ok(interp) = Interpreter::open(path, start) else {
+        // `check` has already reported why the file cannot be opened.
+        return report;
+    };
+    let mut machine = MachineChecks::new(path, config, start);
+    for item in interp {
+        match item {
+            Ok(op) => machine.op(op, &mut report),
+            Err(d) => {
+                report.undecided.push(format!(
+                    "machine checks stop at line {}: the program's positions after its first \
+                     error depend on how that error is resolved",
+                    d.line
+                ));
+                if first_error_line.is_none() {
+                    report.errors.push(d);
+                }
+                break;
+            }
+        }
+    }
+    machine.finish(&mut report);
+    if config.tools.is_none() && machine.tool_calls > 0 {
+        report
+            .undecided
+            .push("the machine has no tool table: tool existence was not checked".into());
+    }
+    report
+}
+
+/// The machine-side checks, op by op.
+struct MachineChecks<'a> {
+    path: &'a Path,
+    config: &'a MachineConfig,
+    letters: Vec<AxisLetter>,
+    travel: Vec<[f64; 2]>,
+    positioning: Vec<Option<(f64, f64)>>,
+    planner: Option<Planner>,
+    tool_calls: u64,
+}
+
+impl<'a> MachineChecks<'a> {
+    fn new(path: &'a Path, config: &'a MachineConfig, start: Pose) -> Self {
+        let planner = Planner::new(
+            PlannerConfig {
+                limits: config.axis_limits(),
+                period: config.servo_period,
+                tolerance: config.tolerance,
+            },
+            start,
+        )
+        .ok();
+        Self {
+            path,
+            config,
+            letters: config.letters(),
+            travel: config.axes.iter().map(|a| a.travel).collect(),
+            positioning: positioning_axes(config),
+            planner,
+            tool_calls: 0,
+        }
+    }
+
+    fn error(&self, report: &mut TestRunReport, loc: SourceLoc, message: String) {
+        report
+            .errors
+            .push(block_diagnostic(self.path, loc, message));
+    }
+
+    fn op(&mut self, op: Op, report: &mut TestRunReport) {
+        if op.kind.is_motion() {
+            report.motion_ops += 1;
+            self.widen(&op, report);
+        }
+        if let Err(d) = check_travel(&op, &self.letters, &self.travel, self.path) {
+            report.errors.push(d);
+        }
+        if let Err(d) = check_positioning(&op, &self.letters, &self.positioning, self.path) {
+            report.errors.push(d);
+        }
+        if let Some(w) = self.feed_warning(&op) {
+            report.warnings.push(w);
+        }
+        match &op.kind {
+            OpKind::Spindle { dir, speed, .. } => self.spindle(op.loc, *dir, *speed, report),
+            OpKind::ToolChange { tool, .. } => {
+                self.tool_calls += 1;
+                if let Some(tools) = &self.config.tools
+                    && !tools.iter().any(|t| t.number == *tool)
+                {
+                    self.error(
+                        report,
+                        op.loc,
+                        format!("tool {tool} is not in the machine's tool table"),
+                    );
+                }
+            }
+            _ => {}
+        }
+        self.plan(op, report);
+    }
+
+    fn widen(&self, op: &Op, report: &mut TestRunReport) {
+        let Some((lo, hi)) = op_bounds(&op.kind) else {
+            return;
+        };
+        for (l, min, max) in &mut report.envelope {
+            if lo[*l].is_finite() {
+                *min = min.min(lo[*l]);
+            }
+            if hi[*l].is_finite() {
+                *max = max.max(hi[*l]);
+            }
+        }
+    }
+
+    fn spindle(
+        &self,
+        loc: SourceLoc,
+        dir: SpindleDir,
+        speed: SpindleSpeed,
+        report: &mut TestRunReport,
+    ) {
+        let rpm = match speed {
+            SpindleSpeed::Rpm(r) => r,
+            SpindleSpeed::SurfaceSpeed(_) => {
+                if dir != SpindleDir::Off {
+                    self.error(
+                        report,
+                        loc,
+                        "constant surface speed needs a lathe".to_string(),
+                    );
+                }
+                return;
+            }
+        };
+        if dir == SpindleDir::Off {
+            return;
+        }
+        match &self.config.spindle {
+            Some(s) if rpm.abs() > s.max_rpm => self.error(
+                report,
+                loc,
+                format!(
+                    "spindle speed S{rpm} is above this machine's {} rpm",
+                    s.max_rpm
+                ),
+            ),
+            None if rpm != 0.0 => report.warnings.push(block_diagnostic(
+                self.path,
+                loc,
+                "this machine has no spindle: S/M3/M4 is ignored".into(),
+            )),
+            _ => {}
+        }
+    }
+
+    /// A warning when a programmed feed is above what the moved axes allow.
+    fn feed_warning(&self, op: &Op) -> Option<Diagnostic> {
+        let (from, to, feed) = match &op.kind {
+            OpKind::Line {
+                from,
+                to,
+                feed: Feed::Rate(f),
+            } => (from, to, *f),
+            OpKind::Arc {
+                from,
+                to,
+                feed: Feed::Rate(f),
+                ..
+            } => (from, to, *f),
+            _ => return None,
+        };
+        let (lo, hi) = op_bounds(&op.kind)?;
+        // Along a line each axis moves a fixed share of the path; an arc needs each of its
+        // plane axes at full path speed somewhere, so the share is taken as 1 there.
+        let length: f64 = match &op.kind {
+            OpKind::Line { from, to, .. } => (0..9)
+                .map(|i| (to.0[i] - from.0[i]).powi(2))
+                .sum::<f64>()
+                .sqrt(),
+            _ => 0.0,
+        };
+        let mut allowed = f64::INFINITY;
+        let mut by = None;
+        for a in &self.config.axes {
+            let l = a.letter;
+            let span = hi[l] - lo[l];
+            if span.is_nan() || span <= 1e-12 {
+                continue;
+            }
+            let share = if length > 1e-12 {
+                (to[l] - from[l]).abs() / length
+            } else {
+                1.0
+            };
+            if share > 1e-12 {
+                let v = a.max_velocity / share;
+                if v < allowed {
+                    allowed = v;
+                    by = Some(l);
+                }
+            }
+        }
+        let l = by?;
+        (feed > allowed * (1.0 + 1e-9)).then(|| {
+            block_diagnostic(
+                self.path,
+                op.loc,
+                format!(
+                    "feed {:.0} mm/min is above what axis {l} allows here ({:.0} mm/min): \
+                     the control limits it",
+                    feed * 60.0,
+                    allowed * 60.0
+                ),
+            )
+        })
+    }
+
+    /// Plans the op (no motion): the planner's refusals are errors.
+    fn plan(&mut self, op: Op, report: &mut TestRunReport) {
+        let Some(planner) = &mut self.planner else {
+            return;
+        };
+        let loc = op.loc;
+        if let Err(e) = planner.push(op) {
+            self.error(report, loc, e.to_string());
+            report.undecided.push(format!(
+                "the planner pass stops at line {}: later moves start from an unknown point",
+                loc.line
+            ));
+            self.planner = None;
+            return;
+        }
+        while !planner.needs_input() {
+            match planner.next_step() {
+                Some(Step::Sample(s)) => report.planned_time = s.t,
+                Some(Step::Event(_)) => {}
+                None => break,
+            }
+            if report.planned_time > MAX_PLANNED_TIME {
+                report.undecided.push(format!(
+                    "the planner pass stopped after {MAX_PLANNED_TIME} s of machine time"
+                ));
+                self.planner = None;
+                return;
+            }
+        }
+    }
+
+    fn finish(&mut self, report: &mut TestRunReport) {
+        let Some(planner) = &mut self.planner else {
+            return;
+        };
+        planner.finish();
+        while report.planned_time <= MAX_PLANNED_TIME {
+            match planner.next_step() {
+                Some(Step::Sample(s)) => report.planned_time = s.t,
+                Some(Step::Event(_)) => {}
+                None => break,
+            }
+        }
+    }
+}
+
+/// A diagnostic for the block at `loc`, its message prefixed with the block number.
+pub(crate) fn block_diagnostic(path: &Path, loc: SourceLoc, message: String) -> Diagnostic {
+    Diagnostic {
+        file: path.to_path_buf(),
+        line: loc.line,
+        col: loc.col,
+        block: loc.block,
+        message: match loc.block {
+            Some(n) => format!("block {n}: {message}"),
+            None => message,
+        },
+    }
+}
+
+/// True when a motion op moves a positioning-only axis.
+pub(crate) fn moves_positioning_axis(
+    op: &Op,
+    letters: &[AxisLetter],
+    positioning: &[Option<(f64, f64)>],
+) -> bool {
+    let Some((lo, hi)) = op_bounds(&op.kind) else {
+        return false;
+    };
+    letters
+        .iter()
+        .zip(positioning)
+        .any(|(l, p)| p.is_some() && hi[*l] - lo[*l] > 1e-12)
+}
+
+/// Refuses a motion op that moves a positioning-only axis together with another axis: such an
+/// axis follows its own profile behind a slow link and cannot keep to a shared path.
+pub(crate) fn check_positioning(
+    op: &Op,
+    letters: &[AxisLetter],
+    positioning: &[Option<(f64, f64)>],
+    path: &Path,
+) -> Result<(), Diagnostic> {
+    let Some((lo, hi)) = op_bounds(&op.kind) else {
+        return Ok(());
+    };
+    let moved: Vec<usize> = (0..9).filter(|&i| hi.0[i] - lo.0[i] > 1e-12).collect();
+    if moved.len() < 2 {
+        return Ok(());
+    }
+    for (&l, p) in letters.iter().zip(positioning) {
+        if p.is_some() && moved.contains(&l.index()) {
+            return Err(block_diagnostic(
+                path,
+                op.loc,
+                format!(
+                    "axis {l} is a positioning axis (Modbus): program it in a block of its own"
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Refuses a motion op whose path leaves the travel (soft limits) of an axis, naming the
+/// block and the axis.
+pub(crate) fn check_travel(
+    op: &Op,
+    letters: &[AxisLetter],
+    travel: &[[f64; 2]],
+    path: &Path,
+) -> Result<(), Diagnostic> {
+    let Some((lo, hi)) = op_bounds(&op.kind) else {
+        return Ok(());
+    };
+    for (&l, &[min, max]) in letters.iter().zip(travel) {
+        let (a, b) = (lo[l], hi[l]);
+        if a < min - TRAVEL_SLACK || b > max + TRAVEL_SLACK {
+            let v = if a < min - TRAVEL_SLACK { a } else { b };
+            return Err(block_diagnostic(
+                path,
+                op.loc,
+                format!("axis {l} would move to {v:.4}, outside its travel [{min}, {max}]"),
+            ));
+        }
+    }
+    Ok(())
+}
