@@ -12,6 +12,15 @@ use std::process::ExitCode;
 mod progress;
 mod render;
 
+/// Prints a line to standard output, ignoring a closed pipe (`klar run … | head` must not
+/// panic).
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 /// klar — a CNC control for HEIDENHAIN programs.
 #[derive(Parser)]
 #[command(version, about)]
@@ -193,7 +202,7 @@ fn cmd_check(program: &Path, machine: Option<&Path>, quiet: bool) -> ExitCode {
     let diags = klar_interp::check(program, start_pose(&config));
     if diags.is_empty() {
         if !quiet {
-            println!("{}: ok", program.display());
+            say!("{}: ok", program.display());
         }
         ExitCode::SUCCESS
     } else {
@@ -290,7 +299,7 @@ fn cmd_test_run(program: &Path, config: &MachineConfig) -> ExitCode {
     if !report.passed() {
         return ExitCode::FAILURE;
     }
-    println!(
+    say!(
         "{}: ok on {} ({} moves, {:.3} s planned)",
         program.display(),
         config.name,
@@ -298,7 +307,7 @@ fn cmd_test_run(program: &Path, config: &MachineConfig) -> ExitCode {
         report.planned_time
     );
     for (l, lo, hi) in &report.envelope {
-        println!("  {l}: {lo:.4} .. {hi:.4}");
+        say!("  {l}: {lo:.4} .. {hi:.4}");
     }
     ExitCode::SUCCESS
 }
@@ -354,19 +363,19 @@ fn cmd_run(
         }
     }
     if !quiet {
-        println!("machine:      {}", config.name);
-        println!("machine time: {:.3} s", report.machine_time);
-        println!("blocks:       {}", report.blocks);
-        println!("servo cycles: {}", report.cycles);
+        say!("machine:      {}", config.name);
+        say!("machine time: {:.3} s", report.machine_time);
+        say!("blocks:       {}", report.blocks);
+        say!("servo cycles: {}", report.cycles);
         for (l, fe) in &report.max_following_error {
             let unit = if l.is_rotary() { "deg" } else { "mm" };
-            println!("max following error {l}: {fe:.4} {unit}");
+            say!("max following error {l}: {fe:.4} {unit}");
         }
         if report.spindle_wait > 0.0 {
-            println!("spindle wait: {:.3} s", report.spindle_wait);
+            say!("spindle wait: {:.3} s", report.spindle_wait);
         }
         if report.realtime {
-            println!("underruns:    {}", report.underruns);
+            say!("underruns:    {}", report.underruns);
         }
     }
     match error {
@@ -407,7 +416,7 @@ fn cmd_serve(
     };
     let served = runtime.block_on(klar::serve::serve(options, |addr| {
         let query = if token.is_some() { "?token=…" } else { "" };
-        println!("klar dashboard on http://{addr}/{query}");
+        say!("klar dashboard on http://{addr}/{query}");
         let _ = std::io::stdout().flush();
     }));
     match served {

@@ -20,6 +20,7 @@
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
+pub(crate) mod stream;
 mod stop;
 
 use crate::config::MachineConfig;
@@ -40,6 +41,7 @@ use std::io::Write;
 use std::path::Path;
 use std::time::{Duration, Instant};
 use stop::PendingStop;
+use stream::OpStream;
 
 /// How to run.
 pub struct RunOptions<'a> {
@@ -142,7 +144,7 @@ pub struct Run<'a, 'w> {
     travel: Vec<[f64; 2]>,
     kin: Box<dyn Kinematics>,
     io: MachineIo,
-    interp: Interpreter,
+    ops: OpStream,
     planner: Planner,
     /// Ops read from the interpreter waiting for room in the planner.
     queue: VecDeque<Op>,
@@ -167,6 +169,8 @@ pub struct Run<'a, 'w> {
     positioning: Vec<Option<(f64, f64)>>,
     /// Source of the last sample sent.
     last_loc: Option<SourceLoc>,
+    /// Constant surface speed in m/min while G96 is active.
+    surface_speed: Option<f64>,
     /// Per machine axis: (max acceleration, max jerk) for quick stops.
     stop_limits: Vec<(f64, f64)>,
     /// Per machine axis: the control's following-error limit.
@@ -278,6 +282,7 @@ impl Run<'_, '_> {
     fn apply_sample(&mut self, sample: &Sample) -> Result<(), RunError> {
         if self.last_loc != Some(sample.loc) {
             self.settle_all()?;
+            self.follow_surface_speed()?;
             self.last_loc = Some(sample.loc);
         }
         self.line = sample.loc.line;
@@ -348,6 +353,30 @@ impl Run<'_, '_> {
         }
     }
 
+    /// The main spindle speed for constant surface speed `v` (m/min) at the tool's present
+    /// radius (program X), limited to the machine's maximum.
+    fn surface_speed_rpm(&mut self, v: f64) -> f64 {
+        let radius = self.kin.to_program(&self.commanded)[AxisLetter::X];
+        let max = self.io.spindle_mut().map_or(0.0, |s| s.max_rpm);
+        OpStream::surface_speed_rpm(v, radius, max)
+    }
+
+    /// Under constant surface speed, follows the tool's radius block by block (without
+    /// waiting: the spindle changes speed while the axes move, as on a lathe).
+    fn follow_surface_speed(&mut self) -> Result<(), RunError> {
+        let Some(v) = self.surface_speed else {
+            return Ok(());
+        };
+        let rpm = self.surface_speed_rpm(v);
+        if let Some(s) = self.io.spindle_mut() {
+            let now = s.commanded();
+            if now != 0.0 && (rpm - now.abs()).abs() > 0.01 * now.abs() {
+                s.command(rpm.copysign(now))?;
+            }
+        }
+        Ok(())
+    }
+
     fn diagnostic(&self, loc: SourceLoc, message: String) -> RunError {
         RunError::Program(block_diagnostic(self.path, loc, message))
     }
@@ -359,11 +388,13 @@ impl Run<'_, '_> {
         speed: SpindleSpeed,
     ) -> Result<(), RunError> {
         let rpm = match speed {
-            SpindleSpeed::Rpm(r) => r,
-            SpindleSpeed::SurfaceSpeed(_) => {
-                return Err(
-                    self.diagnostic(loc, "constant surface speed needs a lathe".to_string())
-                );
+            SpindleSpeed::Rpm(r) => {
+                self.surface_speed = None;
+                r
+            }
+            SpindleSpeed::SurfaceSpeed(v) => {
+                self.surface_speed = (dir != SpindleDir::Off).then_some(v);
+                self.surface_speed_rpm(v)
             }
         };
         let signed = match dir {
@@ -504,6 +535,8 @@ impl<'a, 'w> Run<'a, 'w> {
         let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
         let interp =
             Interpreter::open(path, start).map_err(|d| fail(RunError::Program(d), &report))?;
+        let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
+        let ops = OpStream::new(interp, start, max_rpm, path);
         let planner_config = PlannerConfig {
             limits: config.axis_limits(),
             period: config.servo_period,
@@ -548,7 +581,7 @@ impl<'a, 'w> Run<'a, 'w> {
             travel: config.axes.iter().map(|a| a.travel).collect(),
             kin,
             io,
-            interp,
+            ops,
             planner,
             queue: VecDeque::new(),
             input_done: false,
@@ -565,6 +598,7 @@ impl<'a, 'w> Run<'a, 'w> {
             warned_no_spindle: false,
             positioning: positioning_axes(config),
             last_loc: None,
+            surface_speed: None,
             stop_limits: config
                 .axes
                 .iter()
@@ -659,7 +693,7 @@ impl<'a, 'w> Run<'a, 'w> {
             feed_override: self.planner.feed_override(),
             path_speed: self.planner.path_speed(),
             spindle_rpm,
-            blocks: self.interp.blocks_executed(),
+            blocks: self.ops.blocks_executed(),
         }
     }
 
@@ -672,7 +706,7 @@ impl<'a, 'w> Run<'a, 'w> {
     /// `error` is the error that ended the run early, if any; an error found while reading
     /// ahead (reported after the motion before it finished) comes out here too.
     pub fn finish(mut self, error: Option<RunError>) -> Result<RunReport, Box<RunFailure>> {
-        self.report.blocks = self.interp.blocks_executed();
+        self.report.blocks = self.ops.blocks_executed();
         let disabled = self.io.disable();
         let report = self.report;
         let trace_done = match self.trace {
@@ -702,7 +736,7 @@ impl<'a, 'w> Run<'a, 'w> {
                 }
                 continue;
             }
-            let next = match self.interp.next() {
+            let next = match self.ops.next() {
                 Some(Ok(op)) => check_travel(&op, &self.letters, &self.travel, self.path)
                     .and_then(|()| {
                         check_positioning(&op, &self.letters, &self.positioning, self.path)
@@ -721,7 +755,7 @@ impl<'a, 'w> Run<'a, 'w> {
                             self.queue.push_back(exact_stop(loc));
                         }
                     }),
-                Some(Err(d)) => Err(RunError::Program(d)),
+                Some(Err(e)) => Err(e),
                 None => {
                     self.planner.finish();
                     self.input_done = true;

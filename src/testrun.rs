@@ -14,6 +14,8 @@
 use crate::bounds::op_bounds;
 use crate::config::{BackendConfig, MachineConfig};
 use klar_interp::op::{SpindleDir, SpindleSpeed};
+use crate::runtime::RunError;
+use crate::runtime::stream::OpStream;
 use klar_interp::{AxisLetter, Diagnostic, Feed, Interpreter, Op, OpKind, Pose, SourceLoc};
 use klar_motion::{Planner, PlannerConfig, Step};
 use std::path::Path;
@@ -88,7 +90,21 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
         return report;
     };
     let mut machine = MachineChecks::new(path, config, start);
-    for item in interp {
+    let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
+    // The same stream a run plans from: the compensated tool-centre path, feeds resolved.
+    for item in OpStream::new(interp, start, max_rpm, path) {
+        let item = match item {
+            Ok(op) => Ok(op),
+            Err(RunError::Program(d)) => Err(d),
+            // The stream reports only program errors; anything else names no block.
+            Err(e) => Err(Diagnostic {
+                file: path.to_path_buf(),
+                line: 1,
+                col: 1,
+                block: None,
+                message: e.to_string(),
+            }),
+        };
         match item {
             Ok(op) => machine.op(op, &mut report),
             Err(d) => {
@@ -209,7 +225,11 @@ impl<'a> MachineChecks<'a> {
         let rpm = match speed {
             SpindleSpeed::Rpm(r) => r,
             SpindleSpeed::SurfaceSpeed(_) => {
-                if dir != SpindleDir::Off {
+                // Constant surface speed turns the work; the speed follows the radius and
+                // is limited to the machine's maximum.
+                if dir != SpindleDir::Off
+                    && self.config.kinematics != crate::config::KinematicsConfig::Lathe
+                {
                     self.error(
                         report,
                         loc,

@@ -176,3 +176,31 @@ pub enum CompError {
         loc: SourceLoc,
     },
 }
+
+impl CompError {
+    /// The (first) block the error names.
+    pub fn loc(&self) -> Option<SourceLoc> {
+        match self {
+            CompError::NonFinite { loc, .. }
+            | CompError::SideSwitch { loc, .. }
+            | CompError::StartOnArc { loc, .. }
+            | CompError::ArcOutsidePlane { loc, .. }
+            | CompError::SplineCompensated { loc, .. }
+            | CompError::CurveAfterCompensation { loc, .. }
+            | CompError::ToolChangeWhileCompensating { loc, .. }
+            | CompError::NegativeRadius { loc, .. }
+            | CompError::Discontinuity { loc, .. }
+            | CompError::ArcTooSmall { loc, .. }
+            | CompError::ApproachWhileCompensating { loc, .. }
+            | CompError::BadApproach { loc, .. }
+            | CompError::ApproachWithoutContour { loc, .. }
+            | CompError::DepartWithoutContour { loc, .. }
+            | CompError::LctInsideCircle { loc, .. }
+            | CompError::Stopped { loc, .. }
+            | CompError::AfterFinish { loc, .. } => Some(*loc),
+            CompError::NoIntersection { blocks, .. }
+            | CompError::RunsBackwards { blocks, .. }
+            | CompError::Gouge { blocks, .. } => blocks.first().copied(),
+        }
+    }
+}

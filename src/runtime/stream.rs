@@ -1,0 +1,208 @@
+//! The op stream a run plans from: the interpreter's ops through radius compensation, with
+//! the spindle-dependent feeds resolved.
+//!
+//! - Radius compensation ([`Compensator`]) turns the programmed contour into the tool-centre
+//!   path and resolves APPR/DEP, with its bounded look-ahead window.
+//! - Feed per revolution (lathe G95, G195) becomes a path feed from the programmed speed of the
+//!   spindle that turns last: `F · rpm / 60` mm/s. Under constant surface speed (G96) the speed
+//!   is taken at the block's end point radius, `v·1000 / (2π·r)`, limited to the machine's
+//!   maximum — an approximation for blocks that change the radius, where a real control
+//!   varies the feed along the block.
+
+use super::RunError;
+use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
+use klar_interp::{AxisLetter, Diagnostic, Feed, Interpreter, Op, OpKind, Pose};
+use klar_motion::comp::{CompError, Compensator};
+use std::collections::VecDeque;
+
+/// What the stream knows of the programmed spindles.
+#[derive(Debug, Clone, Copy, Default)]
+struct Spindles {
+    /// Main spindle: programmed rpm (0 when stopped).
+    main_rpm: f64,
+    /// Main spindle: constant surface speed in m/min, when G96 is active.
+    surface_speed: Option<f64>,
+    /// Driven tool: programmed rpm (0 when stopped).
+    driven_rpm: f64,
+    /// Which spindle turned last: feeds per revolution refer to it.
+    last: Option<SpindleId>,
+}
+
+/// Interpreter → compensation → feed resolution.
+pub(crate) struct OpStream {
+    interp: Interpreter,
+    comp: Compensator,
+    ready: VecDeque<Op>,
+    done: bool,
+    spindles: Spindles,
+    max_rpm: f64,
+    path: std::path::PathBuf,
+}
+
+impl OpStream {
+    /// A stream over `interp`, compensating from `start`; `max_rpm` limits surface-speed
+    /// conversions.
+    pub(crate) fn new(interp: Interpreter, start: Pose, max_rpm: f64, path: &std::path::Path) -> Self {
+        Self {
+            interp,
+            comp: Compensator::new(start),
+            ready: VecDeque::new(),
+            done: false,
+            spindles: Spindles::default(),
+            max_rpm,
+            path: path.to_path_buf(),
+        }
+    }
+
+    /// Blocks the interpreter executed.
+    pub(crate) fn blocks_executed(&self) -> u64 {
+        self.interp.blocks_executed()
+    }
+
+    /// The spindle speed in rpm for constant surface speed `v` (m/min) at radius `r` (mm).
+    pub(crate) fn surface_speed_rpm(v: f64, r: f64, max_rpm: f64) -> f64 {
+        if r.abs() < 1e-9 {
+            return max_rpm;
+        }
+        (v * 1000.0 / (2.0 * std::f64::consts::PI * r.abs())).min(max_rpm)
+    }
+
+    fn track_spindle(&mut self, op: &Op) {
+        if let OpKind::Spindle {
+            spindle,
+            dir,
+            speed,
+        } = &op.kind
+        {
+            let on = *dir != SpindleDir::Off;
+            match (spindle, speed) {
+                (SpindleId::Main, SpindleSpeed::Rpm(r)) => {
+                    self.spindles.main_rpm = if on { *r } else { 0.0 };
+                    self.spindles.surface_speed = None;
+                }
+                (SpindleId::Main, SpindleSpeed::SurfaceSpeed(v)) => {
+                    self.spindles.surface_speed = Some(*v);
+                    self.spindles.main_rpm = if on { self.max_rpm } else { 0.0 };
+                }
+                (SpindleId::Driven, SpindleSpeed::Rpm(r)) => {
+                    self.spindles.driven_rpm = if on { *r } else { 0.0 };
+                }
+                (SpindleId::Driven, SpindleSpeed::SurfaceSpeed(_)) => {}
+            }
+            if on {
+                self.spindles.last = Some(*spindle);
+            }
+        }
+    }
+
+    /// Resolves a feed per revolution into a path feed for a move ending at `to`.
+    fn resolve_feed(&self, feed: Feed, to: &Pose, op: &Op) -> Result<Feed, RunError> {
+        let Feed::PerRevolution(f) = feed else {
+            return Ok(feed);
+        };
+        let rpm = match self.spindles.last {
+            Some(SpindleId::Driven) => self.spindles.driven_rpm,
+            Some(SpindleId::Main) => match self.spindles.surface_speed {
+                Some(v) if self.spindles.main_rpm != 0.0 => {
+                    Self::surface_speed_rpm(v, to[AxisLetter::X], self.max_rpm)
+                }
+                _ => self.spindles.main_rpm,
+            },
+            None => 0.0,
+        };
+        if rpm.abs() < 1e-9 {
+            return Err(RunError::Program(Diagnostic {
+                file: self.path.clone(),
+                line: op.loc.line,
+                col: op.loc.col,
+                block: op.loc.block,
+                message: format!(
+                    "{}feed per revolution needs a turning spindle",
+                    op.loc.block.map(|n| format!("block {n}: ")).unwrap_or_default()
+                ),
+            }));
+        }
+        Ok(Feed::Rate(f * rpm.abs() / 60.0))
+    }
+
+    /// A compensation refusal as a program diagnostic at the (first) block it names.
+    fn comp_error(&self, e: &CompError) -> RunError {
+        let loc = e.loc().unwrap_or_default();
+        RunError::Program(Diagnostic {
+            file: self.path.clone(),
+            line: loc.line,
+            col: loc.col,
+            block: loc.block,
+            message: format!("radius compensation: {e}"),
+        })
+    }
+
+    fn resolve(&mut self, mut op: Op) -> Result<Op, RunError> {
+        self.track_spindle(&op);
+        let resolved = match &op.kind {
+            OpKind::Line { to, feed, .. }
+            | OpKind::Arc { to, feed, .. }
+            | OpKind::Spline { to, feed, .. } => Some(self.resolve_feed(*feed, to, &op)?),
+            _ => None,
+        };
+        if let Some(new) = resolved {
+            match &mut op.kind {
+                OpKind::Line { feed, .. }
+                | OpKind::Arc { feed, .. }
+                | OpKind::Spline { feed, .. } => *feed = new,
+                _ => {}
+            }
+        }
+        Ok(op)
+    }
+}
+
+impl Iterator for OpStream {
+    type Item = Result<Op, RunError>;
+
+    fn next(&mut self) -> Option<Self::Item> {
+        loop {
+            if let Some(op) = self.ready.pop_front() {
+                return Some(self.resolve(op));
+            }
+            if self.done {
+                return None;
+            }
+            match self.interp.next() {
+                Some(Ok(op)) => {
+                    if let Err(e) = self.comp.push(op) {
+                        self.done = true;
+                        return Some(Err(self.comp_error(&e)));
+                    }
+                }
+                Some(Err(d)) => {
+                    self.done = true;
+                    return Some(Err(RunError::Program(d)));
+                }
+                None => {
+                    self.done = true;
+                    if let Err(e) = self.comp.finish() {
+                        return Some(Err(self.comp_error(&e)));
+                    }
+                }
+            }
+            while let Some(op) = self.comp.pop() {
+                self.ready.push_back(op);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constant_surface_speed_follows_the_radius_and_the_limit() {
+        // 200 m/min at r = 20 mm: 200000 / (2π·20) = 1591.55 rpm.
+        let rpm = OpStream::surface_speed_rpm(200.0, 20.0, 4000.0);
+        assert!((rpm - 1591.549_430_918_953).abs() < 1e-9);
+        assert_eq!(OpStream::surface_speed_rpm(200.0, 2.0, 4000.0), 4000.0);
+        assert_eq!(OpStream::surface_speed_rpm(200.0, 0.0, 4000.0), 4000.0);
+    }
+}
