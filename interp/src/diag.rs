@@ -122,8 +122,23 @@ pub enum ProgramError {
     #[error("{0} not supported yet")]
     NotSupported(String),
     /// An M function that is not implemented.
-    #[error("M{0} not supported")]
+    #[error("M{0} not supported on this machine")]
     UnsupportedM(u32),
+    /// TOOL CALL of a tool missing from the tool table.
+    #[error("tool {0} is not in the tool table")]
+    UnknownTool(String),
+    /// FN 14: the program stopped itself with an error number.
+    #[error("FN 14: program stopped with error number {0}")]
+    FnError(f64),
+    /// CALL PGM could not open the called program.
+    #[error("{0}")]
+    CallPgm(String),
+    /// A jump or call to a label that the program does not define.
+    #[error("{0} not found in the program")]
+    NoLabel(String),
+    /// A subprogram or program call nested too deep, or a program calling itself.
+    #[error("{0}")]
+    Nesting(String),
     /// A C block whose end point lies on a different radius about CC than its start.
     #[error(
         "C end point is {end:.4} mm from CC, start point {start:.4} mm: radii differ by more than {tol} mm"

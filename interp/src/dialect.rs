@@ -7,6 +7,23 @@
 
 use std::path::Path;
 
+use crate::diag::Diagnostic;
+use crate::op::{Op, Pose};
+
+/// A running program in a dialect other than Klartext (TNC ISO, lathe DIN): what the
+/// [`crate::Interpreter`] delegates to.
+pub(crate) trait DialectRun: Iterator<Item = Result<Op, Diagnostic>> + Send {
+    /// Runs to the end without stopping at errors (`syntax_only`: parse only) and returns
+    /// every diagnostic.
+    fn check_all(&mut self, syntax_only: bool) -> Vec<Diagnostic>;
+    /// Blocks executed so far.
+    fn blocks_executed(&self) -> u64;
+    /// The last programmed position.
+    fn last_position(&self) -> Pose;
+    /// Switches block skip (`/` blocks) on or off.
+    fn set_block_skip(&mut self, on: bool);
+}
+
 /// A HEIDENHAIN program language.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Dialect {
@@ -16,6 +33,25 @@ pub enum Dialect {
     Iso,
     /// Lathe DIN PLUS of CNC PILOT / MANUALplus / smart.Turn (`.nc`, `.ncs`).
     LatheDin,
+}
+
+/// The runner for a non-Klartext dialect reading `input` (None for Klartext, which the
+/// [`crate::Interpreter`] runs itself).
+pub(crate) fn runner(
+    dialect: Dialect,
+    file: std::path::PathBuf,
+    input: Box<dyn crate::source::ProgramInput>,
+    start: Pose,
+) -> Option<Box<dyn DialectRun>> {
+    match dialect {
+        Dialect::Klartext => None,
+        Dialect::Iso => Some(Box::new(crate::iso::run::IsoProgram::new(
+            file, input, start,
+        ))),
+        Dialect::LatheDin => Some(Box::new(crate::din::run::DinProgram::new(
+            file, input, start,
+        ))),
+    }
 }
 
 impl Dialect {

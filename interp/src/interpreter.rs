@@ -1,14 +1,15 @@
 //! The streaming interpreter and the whole-program checks built on it.
 
-use std::collections::VecDeque;
+use std::collections::{HashMap, VecDeque};
 use std::fs::File;
 use std::io::{BufRead, BufReader, Cursor};
 use std::path::{Path, PathBuf};
 
 use crate::diag::{Diagnostic, ProgramError};
-use crate::dialect::{Dialect, detect_dialect};
-use crate::klartext::exec::{Blank, Flow, Machine};
-use crate::klartext::parser::{Parser, Stmt};
+use crate::dialect::{Dialect, DialectRun, detect_dialect, runner};
+use crate::klartext::exec::{Blank, Flow, LabelKey, Machine};
+use crate::klartext::parser::{LabelRef, Parser, Stmt};
+use crate::klartext::tools::ToolTable;
 use crate::op::{Op, Pose, SourceLoc};
 use crate::source::{BlockReader, BlockStart, ProgramInput};
 
@@ -38,29 +39,95 @@ enum Phase {
     Done,
 }
 
+/// Deepest nesting of subprogram calls (CALL LBL), as on the TNC.
+pub const MAX_SUBPROGRAM_DEPTH: usize = 8;
+
+/// Deepest nesting of program calls (CALL PGM), as on the TNC.
+pub const MAX_PROGRAM_DEPTH: usize = 4;
+
+/// Most jumps a `check` run follows before it reports an endless loop (a check skips
+/// blocks with errors, so a loop counter that fails to change would never end).
+pub const CHECK_JUMP_LIMIT: u64 = 100_000;
+
+/// Most jumps a run follows without producing any op (no motion, no machine function) before
+/// it stops with an "endless loop" error: a loop that neither moves nor switches anything can
+/// never end differently, and a control must not hang silently on it.
+pub const RUN_IDLE_JUMP_LIMIT: u64 = 1_000_000;
+
+/// Most diagnostics one `check` run reports before it gives up (an error inside a loop
+/// would otherwise repeat with every pass).
+pub const CHECK_DIAGNOSTIC_LIMIT: usize = 200;
+
+/// One program file being executed: its reader, labels and call state.
+struct Unit {
+    /// The file.
+    path: PathBuf,
+    /// Index in the interpreter's file table.
+    file_id: u16,
+    /// Block reader.
+    reader: BlockReader,
+    /// Where the program is in its structure.
+    phase: Phase,
+    /// Labels seen so far and where their blocks start.
+    labels: HashMap<LabelKey, BlockStart>,
+    /// Every block before this point has been read once (labels recorded).
+    seen_to: BlockStart,
+    /// Return points of the active subprogram calls.
+    calls: Vec<BlockStart>,
+    /// Repeats left per section-repeat block (keyed by the block's byte offset).
+    repeats: HashMap<u64, u32>,
+}
+
+impl Unit {
+    fn new(path: PathBuf, file_id: u16, input: Box<dyn ProgramInput>) -> Self {
+        Unit {
+            path,
+            file_id,
+            reader: BlockReader::new(input),
+            phase: Phase::BeforeBegin,
+            labels: HashMap::new(),
+            seen_to: BlockStart { offset: 0, line: 1 },
+            calls: Vec::new(),
+            repeats: HashMap::new(),
+        }
+    }
+}
+
 /// Streaming Klartext interpreter: an iterator of ops, one block at a time.
 ///
 /// Yields `Ok(op)` for every op in program order; after a diagnostic, the end of the program
-/// (END PGM, M2, M30) or the end of the text it yields `None`.
+/// (END PGM, M2, M30) or the end of the text it yields `None`. The last contour element is
+/// handed out one block late, because an RND or CHF in the next block may still shorten it.
+///
+/// Jumps and calls (FN 9–12, CALL LBL, REP, CALL PGM) seek in the file: labels are recorded
+/// as blocks are read, and a jump to a label not seen yet reads ahead to find it, so the
+/// program is never held in memory.
 pub struct Interpreter {
-    file: PathBuf,
-    reader: BlockReader,
+    files: Vec<PathBuf>,
+    units: Vec<Unit>,
     parser: Parser,
     machine: Machine,
     queue: VecDeque<Op>,
-    phase: Phase,
     blocks: u64,
     block_skip: bool,
     finished: bool,
-    /// Where the current block starts in the file: what a label table will record so that
-    /// jumps can seek back without holding the program in memory.
+    done: bool,
+    /// Where the current block starts in its file.
     current: BlockStart,
+    /// A diagnostic to hand out after the ops that precede it.
+    pending_error: Option<Diagnostic>,
+    /// Jumps followed so far (bounded in check runs).
+    jumps: u64,
+    /// Jumps since the last op was handed out (run mode).
+    idle_jumps: u64,
+    /// The runner of a TNC ISO or lathe DIN program, which this interpreter delegates to.
+    other: Option<Box<dyn DialectRun>>,
 }
 
 impl std::fmt::Debug for Interpreter {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Interpreter")
-            .field("file", &self.file)
+            .field("files", &self.files)
             .field("blocks", &self.blocks)
             .finish_non_exhaustive()
     }
@@ -70,68 +137,146 @@ fn whole_file_error(file: &Path, error: &ProgramError) -> Diagnostic {
     Diagnostic::new(file.to_path_buf(), 1, 1, None, error)
 }
 
+/// Opens a program file and recognises its dialect.
+fn open_any(path: &Path) -> Result<(Dialect, Box<dyn ProgramInput>), Diagnostic> {
+    let file =
+        File::open(path).map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
+    let mut reader = BufReader::with_capacity(64 * 1024, file);
+    let head = reader
+        .fill_buf()
+        .map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
+    let head = &head[..head.len().min(4096)];
+    match detect_dialect(path, head) {
+        Some(d) => Ok((d, Box::new(reader))),
+        None => Err(whole_file_error(path, &ProgramError::UnknownDialect)),
+    }
+}
+
+/// Opens a Klartext file for reading, checking its dialect.
+fn open_klartext(path: &Path) -> Result<Box<dyn ProgramInput>, Diagnostic> {
+    let file =
+        File::open(path).map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
+    let mut reader = BufReader::with_capacity(64 * 1024, file);
+    let head = reader
+        .fill_buf()
+        .map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
+    let head = &head[..head.len().min(4096)];
+    match detect_dialect(path, head) {
+        Some(Dialect::Klartext) => Ok(Box::new(reader)),
+        Some(other) => Err(whole_file_error(
+            path,
+            &ProgramError::DialectNotSupported(other.name()),
+        )),
+        None => Err(whole_file_error(path, &ProgramError::UnknownDialect)),
+    }
+}
+
+/// The file a `CALL PGM` names, relative to the calling program's folder. A TNC drive prefix
+/// (`TNC:\`) and backslashes are accepted; without an extension `.h` is added.
+fn called_path(caller: &Path, written: &str) -> PathBuf {
+    let mut name = written.trim().replace('\\', "/");
+    if let Some(rest) = name
+        .strip_prefix("TNC:")
+        .or_else(|| name.strip_prefix("tnc:"))
+    {
+        name = rest.trim_start_matches('/').to_string();
+    }
+    let mut p = PathBuf::from(&name);
+    if p.extension().is_none() {
+        p.set_extension("h");
+    }
+    let dir = caller.parent().unwrap_or(Path::new(""));
+    let joined = dir.join(&p);
+    if joined.exists() {
+        return joined;
+    }
+    // a TNC path names folders of the control: try the file name next to the caller
+    match p.file_name() {
+        Some(f) => dir.join(f),
+        None => joined,
+    }
+}
+
 impl Interpreter {
     /// Opens a program file; `start` is where the machine stands before the first block.
     ///
     /// Fails when the file cannot be read or is not in a dialect this version runs.
     pub fn open(path: &Path, start: Pose) -> Result<Self, Diagnostic> {
-        let file = File::open(path)
-            .map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
-        let mut reader = BufReader::with_capacity(64 * 1024, file);
-        let head = reader
-            .fill_buf()
-            .map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
-        let head = &head[..head.len().min(4096)];
-        match detect_dialect(path, head) {
-            Some(Dialect::Klartext) => {}
-            Some(other) => {
-                return Err(whole_file_error(
-                    path,
-                    &ProgramError::DialectNotSupported(other.name()),
-                ));
-            }
-            None => return Err(whole_file_error(path, &ProgramError::UnknownDialect)),
+        let (dialect, input) = open_any(path)?;
+        tracing::debug!(file = %path.display(), dialect = dialect.name(), "opened program");
+        if dialect == Dialect::Klartext {
+            return Ok(Self::with_input(path.to_path_buf(), input, start));
         }
-        tracing::debug!(file = %path.display(), "opened Klartext program");
-        Ok(Self::with_input(
-            path.to_path_buf(),
-            Box::new(reader),
-            start,
-        ))
+        let mut it = Self::with_input(path.to_path_buf(), Box::new(Cursor::new(Vec::new())), start);
+        it.other = runner(dialect, path.to_path_buf(), input, start);
+        Ok(it)
     }
 
-    /// Interprets Klartext held in memory (tests, benches); `name` is used in diagnostics.
+    /// Interprets a program held in memory (tests, benches); `name` is used in diagnostics and
+    /// as the folder CALL PGM paths are relative to. The dialect is recognised from `name` and
+    /// the text as for files (TNC ISO for `.i`, lathe DIN for `.nc`); Klartext when neither
+    /// tells.
     pub fn from_source(name: &str, text: &str, start: Pose) -> Self {
-        Self::with_input(
+        let input = Box::new(Cursor::new(text.as_bytes().to_vec()));
+        let dialect = detect_dialect(Path::new(name), text.as_bytes()).unwrap_or(Dialect::Klartext);
+        if dialect == Dialect::Klartext {
+            return Self::with_input(PathBuf::from(name), input, start);
+        }
+        let mut it = Self::with_input(
             PathBuf::from(name),
-            Box::new(Cursor::new(text.as_bytes().to_vec())),
+            Box::new(Cursor::new(Vec::new())),
             start,
-        )
+        );
+        it.other = runner(dialect, PathBuf::from(name), input, start);
+        it
     }
 
     fn with_input(file: PathBuf, input: Box<dyn ProgramInput>, start: Pose) -> Self {
         Interpreter {
-            file,
-            reader: BlockReader::new(input),
+            files: vec![file.clone()],
+            units: vec![Unit::new(file, 0, input)],
             parser: Parser::default(),
             machine: Machine::new(start),
             queue: VecDeque::with_capacity(8),
-            phase: Phase::BeforeBegin,
             blocks: 0,
             block_skip: true,
             finished: false,
+            done: false,
             current: BlockStart { offset: 0, line: 1 },
+            pending_error: None,
+            jumps: 0,
+            idle_jumps: 0,
+            other: None,
         }
+    }
+
+    /// Uses `tools` for TOOL CALL: length and radius come from the table (plus the table's
+    /// and the call's DL/DR), and calling a tool missing from a non-empty table is an error.
+    pub fn with_tools(mut self, tools: ToolTable) -> Self {
+        self.machine.set_tools(tools);
+        self
+    }
+
+    /// Sets the highest tool-axis position (mm), the target of `M140 MB MAX`.
+    pub fn with_retract_limit(mut self, limit: f64) -> Self {
+        self.machine.retract_limit = Some(limit);
+        self
     }
 
     /// Number of blocks executed so far (empty and comment lines not counted).
     pub fn blocks_executed(&self) -> u64 {
-        self.blocks
+        match &self.other {
+            Some(o) => o.blocks_executed(),
+            None => self.blocks,
+        }
     }
 
     /// Switches block skip: when on (the default) blocks marked `/` are not executed.
     pub fn set_block_skip(&mut self, on: bool) {
         self.block_skip = on;
+        if let Some(o) = &mut self.other {
+            o.set_block_skip(on);
+        }
     }
 
     /// The blank recorded from BLK FORM, if any.
@@ -139,72 +284,272 @@ impl Interpreter {
         self.machine.blank
     }
 
-    /// Byte offset and line where the block read last starts.
+    /// Byte offset and line where the block read last starts (in the file running now).
     pub fn block_offset(&self) -> (u64, u32) {
         (self.current.offset, self.current.line)
     }
 
     /// The last programmed position (mm, degrees).
     pub fn position(&self) -> Pose {
-        self.machine.pos
+        match &self.other {
+            Some(o) => o.last_position(),
+            None => self.machine.pos,
+        }
+    }
+
+    /// The program files in use: index = [`SourceLoc::file`] (0 = the main program).
+    pub fn files(&self) -> &[PathBuf] {
+        &self.files
+    }
+
+    fn unit(&self) -> Option<&Unit> {
+        self.units.last()
     }
 
     fn diag_at(&self, pos: usize, block: Option<u64>, error: &ProgramError) -> Diagnostic {
-        let (line, col) = self.reader.position(pos);
-        Diagnostic::new(self.file.clone(), line, col, block, error)
+        match self.unit() {
+            Some(u) => {
+                let (line, col) = u.reader.position(pos);
+                Diagnostic::new(u.path.clone(), line, col, block, error)
+            }
+            None => Diagnostic::new(PathBuf::new(), 1, 1, block, error),
+        }
+    }
+
+    fn diag_end(&self, error: &ProgramError) -> Diagnostic {
+        match self.unit() {
+            Some(u) => {
+                let (line, col) = u.reader.end_position();
+                Diagnostic::new(u.path.clone(), line, col, None, error)
+            }
+            None => Diagnostic::new(PathBuf::new(), 1, 1, None, error),
+        }
+    }
+
+    /// Records a label block read at `start` (the first definition counts).
+    fn note_label(&mut self, text_label: Option<LabelKey>, start: BlockStart) {
+        if let (Some(key), Some(u)) = (text_label, self.units.last_mut()) {
+            u.labels.entry(key).or_insert(start);
+        }
+    }
+
+    /// Marks the blocks up to the reader's position as read.
+    fn note_seen(&mut self) {
+        if let Some(u) = self.units.last_mut() {
+            let next = u.reader.next_start();
+            if next.offset > u.seen_to.offset {
+                u.seen_to = next;
+            }
+        }
+    }
+
+    /// Where a label's block starts; reads ahead from the furthest block read so far when
+    /// the label has not been seen yet.
+    fn find_label(&mut self, key: &LabelKey) -> Result<BlockStart, ProgramError> {
+        let missing = || ProgramError::NoLabel(key.to_string());
+        let Some(u) = self.units.last_mut() else {
+            return Err(missing());
+        };
+        if let Some(s) = u.labels.get(key) {
+            return Ok(*s);
+        }
+        let resume = u.reader.next_start();
+        let io = |e: std::io::Error| ProgramError::Io(e.to_string());
+        u.reader.seek(u.seen_to).map_err(io)?;
+        let mut found = None;
+        while let Some(start) = u.reader.next_block().map_err(io)? {
+            let next = u.reader.next_start();
+            if next.offset > u.seen_to.offset {
+                u.seen_to = next;
+            }
+            if let Ok(block) = self.parser.parse(u.reader.text())
+                && let Stmt::Label(r) = block.stmt
+            {
+                let k = LabelKey::from_ref(r, u.reader.text());
+                let hit = k == *key;
+                u.labels.entry(k).or_insert(start);
+                if hit {
+                    found = Some(start);
+                    break;
+                }
+            }
+        }
+        u.reader.seek(resume).map_err(io)?;
+        found.ok_or_else(missing)
+    }
+
+    /// Continues reading at a label.
+    fn jump(&mut self, key: &LabelKey, mode: Mode) -> Result<(), ProgramError> {
+        self.jumps += 1;
+        self.idle_jumps += 1;
+        if mode == Mode::Run && self.idle_jumps > RUN_IDLE_JUMP_LIMIT {
+            return Err(ProgramError::Nesting(format!(
+                "more than {RUN_IDLE_JUMP_LIMIT} jumps without any motion: endless loop"
+            )));
+        }
+        if mode == Mode::Check && self.jumps > CHECK_JUMP_LIMIT {
+            return Err(ProgramError::Nesting(format!(
+                "more than {CHECK_JUMP_LIMIT} jumps: the check stops here (endless loop?)"
+            )));
+        }
+        let target = self.find_label(key)?;
+        if let Some(u) = self.units.last_mut() {
+            u.reader
+                .seek(target)
+                .map_err(|e| ProgramError::Io(e.to_string()))?;
+        }
+        Ok(())
+    }
+
+    /// Acts on the control flow a block asked for.
+    fn follow(&mut self, flow: Flow, mode: Mode) -> Result<(), ProgramError> {
+        match flow {
+            Flow::Continue | Flow::End => Ok(()),
+            Flow::Goto(key) => self.jump(&key, mode),
+            Flow::Call { label, rep: None } => {
+                let depth: usize = self.units.iter().map(|u| u.calls.len()).sum();
+                if depth >= MAX_SUBPROGRAM_DEPTH {
+                    return Err(ProgramError::Nesting(format!(
+                        "CALL {label}: subprograms nested deeper than {MAX_SUBPROGRAM_DEPTH} levels"
+                    )));
+                }
+                let ret = match self.units.last() {
+                    Some(u) => u.reader.next_start(),
+                    None => return Ok(()),
+                };
+                self.jump(&label, mode)?;
+                if let Some(u) = self.units.last_mut() {
+                    u.calls.push(ret);
+                }
+                Ok(())
+            }
+            Flow::Call {
+                label,
+                rep: Some(count),
+            } => {
+                let at = self.current.offset;
+                let Some(u) = self.units.last_mut() else {
+                    return Ok(());
+                };
+                let left = u.repeats.entry(at).or_insert(count);
+                if *left == 0 {
+                    u.repeats.remove(&at);
+                    return Ok(());
+                }
+                *left -= 1;
+                self.jump(&label, mode)
+            }
+            Flow::CallPgm(written) => self.call_program(&written),
+        }
+    }
+
+    /// CALL PGM: opens the called file and runs it until its END PGM.
+    fn call_program(&mut self, written: &str) -> Result<(), ProgramError> {
+        let Some(caller) = self.unit().map(|u| u.path.clone()) else {
+            return Ok(());
+        };
+        let path = called_path(&caller, written);
+        if self.units.len() > MAX_PROGRAM_DEPTH {
+            return Err(ProgramError::Nesting(format!(
+                "CALL PGM {written}: program calls nested deeper than {MAX_PROGRAM_DEPTH} levels"
+            )));
+        }
+        let canon = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+        if self
+            .units
+            .iter()
+            .any(|u| std::fs::canonicalize(&u.path).unwrap_or_else(|_| u.path.clone()) == canon)
+        {
+            return Err(ProgramError::Nesting(format!(
+                "CALL PGM {written}: the program is already running (recursive call)"
+            )));
+        }
+        let input = open_klartext(&path).map_err(|d| {
+            ProgramError::CallPgm(format!("CALL PGM {}: {}", path.display(), d.message))
+        })?;
+        let id = match self.files.iter().position(|f| *f == path) {
+            Some(i) => i,
+            None => {
+                self.files.push(path.clone());
+                self.files.len() - 1
+            }
+        };
+        let id = u16::try_from(id)
+            .map_err(|_| ProgramError::Nesting("too many program files".into()))?;
+        tracing::debug!(file = %path.display(), "CALL PGM");
+        self.units.push(Unit::new(path, id, input));
+        Ok(())
     }
 
     /// Reads and processes one block. Ops go to the queue.
     fn step(&mut self, mode: Mode) -> Result<(), Diagnostic> {
-        match self.reader.next_block() {
+        let Some(u) = self.units.last_mut() else {
+            self.done = true;
+            return Ok(());
+        };
+        match u.reader.next_block() {
             Ok(Some(s)) => self.current = s,
             Ok(None) => {
-                let was = self.phase;
-                self.phase = Phase::Done;
-                if was == Phase::Ended {
-                    return Ok(());
-                }
-                let (line, col) = self.reader.end_position();
-                let error = if was == Phase::BeforeBegin {
-                    ProgramError::MissingBegin
-                } else {
-                    ProgramError::MissingEnd
+                let was = u.phase;
+                u.phase = Phase::Done;
+                let error = match was {
+                    Phase::Ended => None,
+                    Phase::BeforeBegin => Some(ProgramError::MissingBegin),
+                    _ => Some(ProgramError::MissingEnd),
                 };
-                return Err(Diagnostic::new(self.file.clone(), line, col, None, &error));
+                let d = error.map(|e| self.diag_end(&e));
+                if self.units.len() > 1 && mode != Mode::Syntax && d.is_none() {
+                    self.units.pop();
+                } else {
+                    self.done = true;
+                }
+                return d.map_or(Ok(()), Err);
             }
             Err(e) => {
-                self.phase = Phase::Done;
-                let (line, col) = self.reader.end_position();
-                return Err(Diagnostic::new(
-                    self.file.clone(),
-                    line,
-                    col,
-                    None,
-                    &ProgramError::Io(e.to_string()),
-                ));
+                u.phase = Phase::Done;
+                self.done = true;
+                return Err(self.diag_end(&ProgramError::Io(e.to_string())));
             }
         };
-        let block = match self.parser.parse(self.reader.text()) {
+        self.note_seen();
+        let Some(u) = self.units.last_mut() else {
+            return Ok(());
+        };
+        let block = match self.parser.parse(u.reader.text()) {
             Ok(b) => b,
             Err(pe) => {
-                if self.phase == Phase::BeforeBegin {
-                    self.phase = Phase::Running;
+                if u.phase == Phase::BeforeBegin {
+                    u.phase = Phase::Running;
                 }
                 return Err(self.diag_at(pe.pos, pe.number, &pe.error));
             }
         };
-        if block.stmt == Stmt::Empty {
+        if matches!(block.stmt, Stmt::Empty) {
             return Ok(());
         }
-        match (self.phase, block.stmt) {
+        if let Stmt::Label(r) = block.stmt
+            && u.phase != Phase::BeforeBegin
+        {
+            let key = LabelKey::from_ref(r, u.reader.text());
+            let start = self.current;
+            self.note_label(Some(key), start);
+        }
+        let Some(u) = self.units.last_mut() else {
+            return Ok(());
+        };
+        match (u.phase, &block.stmt) {
             (Phase::BeforeBegin, Stmt::BeginPgm { inch }) => {
-                self.machine.set_inch(inch);
-                self.phase = Phase::Running;
+                if self.units.len() == 1 {
+                    self.machine.set_inch(*inch);
+                }
+                if let Some(u) = self.units.last_mut() {
+                    u.phase = Phase::Running;
+                }
                 self.blocks += 1;
                 return Ok(());
             }
             (Phase::BeforeBegin, _) => {
-                self.phase = Phase::Running;
+                u.phase = Phase::Running;
                 return Err(self.diag_at(block.start, block.number, &ProgramError::MissingBegin));
             }
             (Phase::Ended | Phase::Done, _) => {
@@ -218,47 +563,76 @@ impl Interpreter {
                 ));
             }
             (Phase::Stopped, Stmt::EndPgm) => {
-                self.phase = Phase::Ended;
+                u.phase = Phase::Ended;
                 return Ok(());
             }
             (Phase::Stopped, _) => return Ok(()),
             (Phase::Running, _) => {}
         }
         if mode == Mode::Syntax {
-            if block.stmt == Stmt::EndPgm {
-                self.phase = Phase::Ended;
+            if matches!(block.stmt, Stmt::EndPgm) {
+                u.phase = Phase::Ended;
             }
             return Ok(());
         }
         if block.skip && self.block_skip {
             return Ok(());
         }
-        let (line, col) = self.reader.position(block.start);
+        // LBL 0 closes the running subprogram
+        if matches!(block.stmt, Stmt::Label(LabelRef::Num(0)))
+            && let Some(ret) = u.calls.pop()
+        {
+            self.blocks += 1;
+            return u.reader.seek(ret).map_err(|e| {
+                self.diag_at(block.start, block.number, &ProgramError::Io(e.to_string()))
+            });
+        }
+        // END PGM of a called program returns to the caller
+        let called = self.units.len() > 1;
+        let Some(u) = self.units.last_mut() else {
+            return Ok(());
+        };
+        if matches!(block.stmt, Stmt::EndPgm) && called {
+            self.blocks += 1;
+            self.units.pop();
+            return Ok(());
+        }
+        let (line, col) = u.reader.position(block.start);
         let loc = SourceLoc {
-            file: 0,
+            file: u.file_id,
             line,
             col,
             block: block.number,
         };
         self.blocks += 1;
-        match self.machine.exec(
+        let result = self.machine.exec(
             &block.stmt,
             &self.parser,
-            self.reader.text(),
+            u.reader.text(),
             loc,
             &mut self.queue,
-        ) {
+        );
+        match result {
             Ok(Flow::Continue) => Ok(()),
             Ok(Flow::End) => {
-                self.phase = if block.stmt == Stmt::EndPgm {
-                    Phase::Ended
-                } else {
-                    Phase::Stopped
-                };
+                let ended = matches!(block.stmt, Stmt::EndPgm);
+                for u in &mut self.units {
+                    u.phase = if ended { Phase::Ended } else { Phase::Stopped };
+                }
+                // M2/M30 in a called program end the whole run: drop the callers
+                self.units.truncate(1);
+                self.machine.release();
                 if mode == Mode::Run {
                     self.finished = true;
                 }
                 Ok(())
+            }
+            Ok(flow) => {
+                // locate now: reading ahead for a label replaces the block text
+                let (line, col) = u.reader.position(block.start);
+                let file = u.path.clone();
+                self.follow(flow, mode)
+                    .map_err(|e| Diagnostic::new(file, line, col, block.number, &e))
             }
             Err((pos, error)) => {
                 let p = pos.map_or(block.start, |p| p as usize);
@@ -267,14 +641,31 @@ impl Interpreter {
         }
     }
 
+    /// Hands out the queued ops that can no longer change.
+    fn pop_ready(&mut self) -> Option<Op> {
+        if !self.machine.front_ready() {
+            return None;
+        }
+        let op = self.queue.pop_front()?;
+        self.machine.popped();
+        Some(op)
+    }
+
     /// Runs to the end in `mode`, collecting every diagnostic.
     fn run_all(&mut self, mode: Mode) -> Vec<Diagnostic> {
+        if let Some(o) = &mut self.other {
+            return o.check_all(mode == Mode::Syntax);
+        }
         let mut diags = Vec::new();
-        while self.phase != Phase::Done {
+        while !self.done {
             if let Err(d) = self.step(mode) {
+                let jump_limit = d.message.contains("jumps: the check stops");
                 diags.push(d);
+                if diags.len() >= CHECK_DIAGNOSTIC_LIMIT || jump_limit {
+                    break;
+                }
             }
-            self.queue.clear();
+            while self.pop_ready().is_some() {}
         }
         diags
     }
@@ -284,17 +675,30 @@ impl Iterator for Interpreter {
     type Item = Result<Op, Diagnostic>;
 
     fn next(&mut self) -> Option<Self::Item> {
+        if let Some(o) = &mut self.other {
+            return o.next();
+        }
         loop {
-            if let Some(op) = self.queue.pop_front() {
+            if let Some(op) = self.pop_ready() {
+                self.idle_jumps = 0;
                 return Some(Ok(op));
             }
-            if self.finished || self.phase == Phase::Done {
+            if let Some(d) = self.pending_error.take() {
+                self.queue.clear();
+                return Some(Err(d));
+            }
+            if self.finished || self.done {
+                // nothing can change the held element any more
+                self.machine.release();
+                if let Some(op) = self.pop_ready() {
+                    return Some(Ok(op));
+                }
                 return None;
             }
             if let Err(d) = self.step(Mode::Run) {
                 self.finished = true;
-                self.queue.clear();
-                return Some(Err(d));
+                self.machine.release();
+                self.pending_error = Some(d);
             }
         }
     }

@@ -1,7 +1,7 @@
 //! klar-interp: HEIDENHAIN program text → canonical [`op::Op`] stream.
 //!
-//! Dialects: TNC conversational Klartext (`.h`), TNC ISO (`.i`) and lathe DIN (`.nc`); this
-//! version runs Klartext and recognises the other two. The interpreter streams: it reads a
+//! Dialects: TNC conversational Klartext (`.h`), TNC ISO (`.i`, mapped onto the Klartext
+//! machine: [`iso`]) and lathe DIN (`.nc`: [`din`]). The interpreter streams: it reads a
 //! block, executes it against its modal state and emits the resulting ops, each with the
 //! source location of its block, so memory use does not grow with the program.
 
@@ -16,8 +16,13 @@ mod source;
 
 pub use diag::{Diagnostic, ProgramError};
 pub use dialect::{Dialect, detect_dialect};
-pub use interpreter::{Interpreter, check, syntax_check};
+pub use interpreter::{
+    CHECK_DIAGNOSTIC_LIMIT, CHECK_JUMP_LIMIT, Interpreter, MAX_PROGRAM_DEPTH, MAX_SUBPROGRAM_DEPTH,
+    RUN_IDLE_JUMP_LIMIT, check, syntax_check,
+};
+pub use klartext::contour::SPLINE_START_TOLERANCE;
 pub use klartext::exec::{Blank, C_RADIUS_TOLERANCE, MAX_IPA};
+pub use klartext::tools::{Tool, ToolTable, ToolTableError};
 pub use op::{
     ApproachShape, AxisLetter, CompSide, Feed, Op, OpKind, Plane, Pose, SourceLoc, SplineAxis,
 };

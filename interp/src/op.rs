@@ -5,6 +5,12 @@
 //! Feeds are in mm/s. Each op carries the source location of the block that produced it.
 //! Radius compensation is *not* applied here: ops describe the programmed contour and carry
 //! the compensation state as separate [`OpKind::RadiusComp`] ops; motion offsets the path.
+//!
+//! Lathe programs (lathe DIN) use the same ops: X is always a **radius** in ops — the
+//! interpreter halves the diameter the program writes — so op geometry does not depend on the
+//! machine, and the lathe kinematics maps X, Z, C, Y, B without a diameter factor. Turning
+//! arcs lie in [`Plane::ZX`]; face machining with the C axis turns C so that the point lies
+//! on the X axis (X = radius, Y = 0) or, with a Y axis, moves Y in the turned system.
 
 use serde::{Deserialize, Serialize};
 use std::fmt;
@@ -155,7 +161,8 @@ impl<'de> Deserialize<'de> for Pose {
 pub enum Plane {
     /// X/Y plane, tool axis Z (G17).
     XY,
-    /// Z/X plane, tool axis Y (G18).
+    /// Z/X plane, tool axis Y (G18); also the turning plane of a lathe, where a positive
+    /// sweep turns Z towards X (counter-clockwise with Z to the right and X up: G3/G13).
     ZX,
     /// Y/Z plane, tool axis X (G19).
     YZ,

@@ -129,6 +129,12 @@ impl BlockReader {
     /// Line and column (1-based, in characters) of a byte position in the current block.
     pub fn position(&self, pos: usize) -> (u32, u32) {
         let pos = pos.min(self.buf.len());
+        if let [only] = self.segs.as_slice()
+            && self.buf.get(..pos).is_some_and(<[u8]>::is_ascii)
+        {
+            // one physical line and an ASCII prefix: the column is the byte offset
+            return (only.line, pos as u32 + 1);
+        }
         let seg_index = self.segs.iter().rposition(|s| s.start <= pos).unwrap_or(0);
         let Some(seg) = self.segs.get(seg_index) else {
             return (self.next_line, 1);
@@ -151,8 +157,15 @@ impl BlockReader {
         (seg.line, col + 1)
     }
 
+    /// Where the next block will start (the return point of a subprogram call).
+    pub fn next_start(&self) -> BlockStart {
+        BlockStart {
+            offset: self.next_offset,
+            line: self.next_line,
+        }
+    }
+
     /// Moves the reader so that the next block read starts at `start` (for jumps).
-    #[allow(dead_code)]
     pub fn seek(&mut self, start: BlockStart) -> io::Result<()> {
         self.input.seek(SeekFrom::Start(start.offset))?;
         self.next_offset = start.offset;

@@ -14,10 +14,11 @@
 
 use std::collections::VecDeque;
 
-use super::expr::{ParamKind, ParamRef, Params, Rpn, Value};
+use super::expr::{ParamKind, ParamRef, Params, Rpn};
 use super::geom::{self, P2};
 use super::mfunc::MWords;
-use super::parser::{Coord, FeedWord, Parser, Stmt, ToolCall, ToolId, Words};
+use super::parser::{Cond, Coord, FeedWord, LabelRef, Parser, Stmt, Words};
+use super::tools::ToolTable;
 use crate::diag::ProgramError;
 use crate::op::{
     AxisLetter, CompSide, Feed, Op, OpKind, Plane, Pose, SourceLoc, SpindleDir, SpindleId,
@@ -35,13 +36,58 @@ pub const FULL_CIRCLE_EPS: f64 = 1e-6;
 /// Largest |IPA| of a CP block (TNC 640 input limit), degrees.
 pub const MAX_IPA: f64 = 99_999.999_9;
 
+/// A jump target as the interpreter looks it up: a label number or a label name.
+#[derive(Debug, Clone, PartialEq, Eq, Hash)]
+pub(crate) enum LabelKey {
+    /// `LBL n`.
+    Num(u32),
+    /// `LBL "name"`.
+    Name(String),
+}
+
+impl std::fmt::Display for LabelKey {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LabelKey::Num(n) => write!(f, "LBL {n}"),
+            LabelKey::Name(s) => write!(f, "LBL \"{s}\""),
+        }
+    }
+}
+
+impl LabelKey {
+    /// The key of a label written in `text`.
+    pub fn from_ref(r: LabelRef, text: &[u8]) -> LabelKey {
+        match r {
+            LabelRef::Num(n) => LabelKey::Num(n),
+            LabelRef::Name(s, e) => LabelKey::Name(
+                text.get(s as usize..e as usize)
+                    .unwrap_or(&[])
+                    .iter()
+                    .map(|&b| char::from(b))
+                    .collect(),
+            ),
+        }
+    }
+}
+
 /// What happens after a block.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq, Eq)]
 pub(crate) enum Flow {
     /// Go on with the next block.
     Continue,
     /// The program ended (M2, M30, END PGM).
     End,
+    /// Continue at a label (FN 9–12).
+    Goto(LabelKey),
+    /// Call a subprogram (`rep: None`) or repeat a program section `rep` more times.
+    Call {
+        /// The label.
+        label: LabelKey,
+        /// Repeats of a section repeat.
+        rep: Option<u32>,
+    },
+    /// Run another program file (CALL PGM), path as written.
+    CallPgm(String),
 }
 
 /// An execution error, located at a byte position of the block (or the block start).
@@ -49,9 +95,9 @@ pub(crate) type ExecError = (Option<u32>, ProgramError);
 
 /// The pole / circle centre.
 #[derive(Debug, Clone, Copy, PartialEq)]
-struct Pole {
-    plane: Plane,
-    centre: P2,
+pub(super) struct Pole {
+    pub(super) plane: Plane,
+    pub(super) centre: P2,
 }
 
 /// Blank (workpiece) box from BLK FORM.
@@ -71,37 +117,58 @@ pub(crate) struct Machine {
     /// Last programmed position (mm, degrees).
     pub pos: Pose,
     /// mm per program unit: 1 (MM) or 25.4 (INCH).
-    scale: f64,
+    pub(super) scale: f64,
     /// Tool axis of the last TOOL CALL (Z by default).
-    tool_axis: AxisLetter,
+    pub(super) tool_axis: AxisLetter,
     /// Working plane from the tool axis (CR and CT work in it).
-    plane: Plane,
+    pub(super) plane: Plane,
     /// Circle centre / pole from CC, with the plane it was given in.
-    pole: Option<Pole>,
+    pub(super) pole: Option<Pole>,
     /// Modal feed, mm/s.
-    feed: Option<f64>,
+    pub(super) feed: Option<f64>,
     /// FAUTO feed from TOOL CALL, mm/s.
-    fauto: Option<f64>,
+    pub(super) fauto: Option<f64>,
     /// Active radius compensation.
-    comp: CompSide,
+    pub(super) comp: CompSide,
     /// Active tool number.
-    tool: Option<u32>,
+    pub(super) tool: Option<u32>,
     /// Active tool name, when called by name.
-    tool_name: Option<String>,
+    pub(super) tool_name: Option<String>,
     /// Spindle state.
     pub(super) spindle: SpindleDir,
     /// Programmed spindle speed, rpm.
-    speed: f64,
+    pub(super) speed: f64,
     /// Coolant state.
     pub(super) coolant: bool,
     /// Direction at the end of the last contour element (for CT).
-    tangent: Option<[f64; 9]>,
+    pub(super) tangent: Option<[f64; 9]>,
     /// Q, QL and QR parameters.
     pub params: Params,
     /// Scratch stack for formulas.
-    stack: Vec<f64>,
+    pub(super) stack: Vec<f64>,
     /// Blank from BLK FORM.
     pub blank: Option<Blank>,
+    /// Active tool radius including deltas, mm.
+    pub(super) tool_radius: f64,
+    /// Active tool length including deltas, mm.
+    pub(super) tool_length: f64,
+    /// Tool table (from the machine configuration and TOOL DEF blocks).
+    pub(super) tools: ToolTable,
+    /// Feed of the last motion op (APPR LT/LN/CT use it up to PH).
+    pub(super) last_feed: Option<Feed>,
+    /// Index in the op queue of the last contour element, held back while an RND or CHF
+    /// may still change its end point.
+    pub held_at: Option<usize>,
+    /// RND or CHF waiting for the next contour element.
+    pub(super) corner: Option<super::contour::Corner>,
+    /// Table length and radius (with table deltas) of the active tool, mm.
+    pub(super) tool_base: (f64, f64),
+    /// M126: rotary axes take the shorter way.
+    pub(super) shortest_rotary: bool,
+    /// mm per program unit (public copy for the contour module).
+    pub(super) unit: f64,
+    /// Highest position of the tool axis (M140 MB MAX), when known.
+    pub retract_limit: Option<f64>,
 }
 
 /// An execution error located at a word of the block.
@@ -110,7 +177,7 @@ pub(super) fn at(pos: u32, e: ProgramError) -> ExecError {
 }
 
 /// An execution error located at the start of the block.
-fn here(e: ProgramError) -> ExecError {
+pub(super) fn here(e: ProgramError) -> ExecError {
     (None, e)
 }
 
@@ -135,25 +202,73 @@ impl Machine {
             params: Params::default(),
             stack: Vec::with_capacity(16),
             blank: None,
+            tool_radius: 0.0,
+            tool_length: 0.0,
+            tools: ToolTable::default(),
+            last_feed: None,
+            held_at: None,
+            corner: None,
+            shortest_rotary: false,
+            tool_base: (0.0, 0.0),
+            retract_limit: None,
+            unit: 1.0,
         }
+    }
+
+    /// Uses `tools` for TOOL CALL from now on.
+    pub fn set_tools(&mut self, tools: ToolTable) {
+        self.tools = tools;
+    }
+
+    /// Releases a held contour element (nothing can change it any more).
+    pub fn release(&mut self) {
+        self.held_at = None;
+    }
+
+    /// Notes that the op at the front of the queue was handed out.
+    pub fn popped(&mut self) {
+        self.held_at = self.held_at.map(|h| h.saturating_sub(1));
+    }
+
+    /// True when the front of the queue may be handed out.
+    pub fn front_ready(&self) -> bool {
+        self.held_at != Some(0)
     }
 
     /// Sets the program unit (BEGIN PGM).
     pub fn set_inch(&mut self, inch: bool) {
         self.scale = if inch { 25.4 } else { 1.0 };
+        self.unit = self.scale;
+        // Q113: unit of the main program, 0 = MM, 1 = INCH
+        self.params.set(
+            ParamRef {
+                kind: ParamKind::Q,
+                index: 113,
+            },
+            if inch { 1.0 } else { 0.0 },
+        );
     }
 
-    fn length(&self, axis: AxisLetter, v: f64) -> f64 {
+    pub(super) fn length(&self, axis: AxisLetter, v: f64) -> f64 {
         if axis.is_rotary() { v } else { v * self.scale }
     }
 
-    fn resolve(&self, axis: AxisLetter, c: &Coord) -> f64 {
+    pub(super) fn resolve(&self, axis: AxisLetter, c: &Coord) -> f64 {
         let v = self.length(axis, self.params.value(c.value));
-        if c.incremental { self.pos[axis] + v } else { v }
+        if c.incremental {
+            self.pos[axis] + v
+        } else if self.shortest_rotary && axis.is_rotary() {
+            // M126: go the shorter way round to the programmed angle
+            let here = self.pos[axis];
+            let d = (v - here + 180.0).rem_euclid(360.0) - 180.0;
+            here + d
+        } else {
+            v
+        }
     }
 
     /// The end pose from the axis words (unprogrammed axes keep their value).
-    fn target(&self, w: &Words) -> Pose {
+    pub(super) fn target(&self, w: &Words) -> Pose {
         let mut p = self.pos;
         for a in AxisLetter::ALL {
             if let Some(c) = &w.axes[a.index()] {
@@ -164,7 +279,11 @@ impl Machine {
     }
 
     /// Rejects in-plane axis words in polar blocks.
-    fn no_plane_axes(w: &Words, plane: Plane, block: &'static str) -> Result<(), ExecError> {
+    pub(super) fn no_plane_axes(
+        w: &Words,
+        plane: Plane,
+        block: &'static str,
+    ) -> Result<(), ExecError> {
         let (a, b, _) = plane.axes();
         for ax in [a, b] {
             if let Some(c) = &w.axes[ax.index()] {
@@ -180,7 +299,7 @@ impl Machine {
         Ok(())
     }
 
-    fn feed(&mut self, fw: Option<FeedWord>) -> Result<Option<Feed>, ExecError> {
+    pub(super) fn feed(&mut self, fw: Option<FeedWord>) -> Result<Option<Feed>, ExecError> {
         match fw {
             Some(FeedWord::Max) => Ok(Some(Feed::Rapid)),
             Some(FeedWord::Auto) => match self.fauto {
@@ -205,7 +324,7 @@ impl Machine {
     }
 
     /// mm/min per programmed feed unit: 1 in MM, 2.54 in INCH (F in 0.1 inch/min).
-    fn feed_scale(&self) -> f64 {
+    pub(super) fn feed_scale(&self) -> f64 {
         if self.scale == 1.0 { 1.0 } else { 2.54 }
     }
 
@@ -236,9 +355,43 @@ impl Machine {
     ) -> Result<Flow, ExecError> {
         let w = &parsed.words;
         let code: &[Rpn] = &parsed.code;
+        let emits = !matches!(
+            stmt,
+            Stmt::Empty
+                | Stmt::Label(_)
+                | Stmt::Assign { .. }
+                | Stmt::Centre
+                | Stmt::Round
+                | Stmt::Chamfer
+                | Stmt::Jump { .. }
+                | Stmt::SysRead { .. }
+                | Stmt::Print { .. }
+                | Stmt::ToolDef { .. }
+                | Stmt::BlkForm { .. }
+                | Stmt::BeginPgm { .. }
+        );
+        let path = matches!(
+            stmt,
+            Stmt::Line
+                | Stmt::LinePolar
+                | Stmt::Circle
+                | Stmt::CircleRadius
+                | Stmt::CircleTangent
+                | Stmt::CirclePolar
+                | Stmt::CircleTangentPolar
+        );
+        if emits && !path {
+            if self.corner.is_some() {
+                return Err(here(ProgramError::Geometry(
+                    "RND/CHF must be followed by a contour element (L, C, CR, CT, LP, CP, CTP)"
+                        .into(),
+                )));
+            }
+            self.release();
+        }
         let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
         match stmt {
-            Stmt::Empty | Stmt::Label | Stmt::BeginPgm { .. } => Ok(Flow::Continue),
+            Stmt::Empty | Stmt::Label(_) | Stmt::BeginPgm { .. } => Ok(Flow::Continue),
             Stmt::EndPgm => {
                 self.end_ops(&mut emit);
                 Ok(Flow::End)
@@ -250,30 +403,7 @@ impl Machine {
                 })))
             }
             Stmt::BlkForm { corner, axis } => {
-                let words = w;
-                if *corner == 0 {
-                    return Ok(Flow::Continue);
-                }
-                let mut b = self.blank.unwrap_or(Blank {
-                    axis: None,
-                    min: Pose::ZERO,
-                    max: Pose::ZERO,
-                });
-                let mut p = if *corner == 1 { b.min } else { b.max };
-                for a in AxisLetter::ALL {
-                    if let Some(c) = &words.axes[a.index()] {
-                        let v = self.length(a, self.params.value(c.value));
-                        // incremental MAX point coordinates are relative to the MIN point
-                        p[a] = if c.incremental { b.min[a] + v } else { v };
-                    }
-                }
-                if *corner == 1 {
-                    b.min = p;
-                    b.axis = axis.or(b.axis);
-                } else {
-                    b.max = p;
-                }
-                self.blank = Some(b);
+                self.blk_form(w, *corner, *axis);
                 Ok(Flow::Continue)
             }
             Stmt::Assign { target } => {
@@ -285,6 +415,14 @@ impl Machine {
                 self.tool_call(&parsed.tool, text, &mut emit)?;
                 Ok(Flow::Continue)
             }
+            Stmt::ToolDef {
+                number,
+                length,
+                radius,
+            } => {
+                self.tool_def(*number, *length, *radius)?;
+                Ok(Flow::Continue)
+            }
             Stmt::Centre => {
                 self.centre(w)?;
                 Ok(Flow::Continue)
@@ -292,31 +430,221 @@ impl Machine {
             Stmt::Misc | Stmt::Stop => {
                 let stop = matches!(stmt, Stmt::Stop);
                 let ms = MWords::classify(w)?;
+                ms.modal(self);
                 ms.before(self, &mut emit);
+                ms.motion(self, w, &mut emit)?;
                 let flow = ms.after(self, stop, &mut emit);
                 Ok(flow)
+            }
+            Stmt::Round | Stmt::Chamfer => {
+                self.corner_request(stmt, w)?;
+                Ok(Flow::Continue)
+            }
+            Stmt::Spline => {
+                let ms = MWords::classify(w)?;
+                let op = self.spline(w, &parsed.spline)?;
+                ms.before(self, &mut emit);
+                self.commit(&op);
+                emit(op);
+                Ok(ms.after(self, false, &mut emit))
+            }
+            Stmt::ApproachDepart {
+                approach,
+                kind,
+                polar,
+            } => {
+                let ms = MWords::classify(w)?;
+                let op = self.approach_depart(w, *approach, *kind, *polar)?;
+                ms.before(self, &mut emit);
+                emit(op);
+                Ok(ms.after(self, false, &mut emit))
+            }
+            Stmt::CallLbl { .. } | Stmt::CallPgm { .. } | Stmt::Jump { .. } => {
+                self.flow(stmt, text)
+            }
+            Stmt::FnError { code } => {
+                let n = self.params.value(*code);
+                Err(here(ProgramError::FnError(n)))
+            }
+            Stmt::Print { file, start, end } => {
+                let arg = text
+                    .get(*start as usize..*end as usize)
+                    .unwrap_or(&[])
+                    .iter()
+                    .map(|&b| char::from(b))
+                    .collect::<String>();
+                self.print(*file, &arg);
+                Ok(Flow::Continue)
+            }
+            Stmt::SysRead {
+                target,
+                id,
+                nr,
+                idx,
+            } => {
+                let v = self.sysread(*id, *nr, *idx)?;
+                self.params.set(*target, v);
+                Ok(Flow::Continue)
             }
             Stmt::Line
             | Stmt::LinePolar
             | Stmt::Circle
             | Stmt::CircleRadius
             | Stmt::CircleTangent
-            | Stmt::CirclePolar => {
-                let ms = MWords::classify(w)?;
+            | Stmt::CirclePolar
+            | Stmt::CircleTangentPolar => {
+                let plain = w.m_count == 0;
+                let ms = if plain {
+                    MWords::default()
+                } else {
+                    MWords::classify(w)?
+                };
+                ms.modal(self);
                 let motion = self.motion(stmt, w)?;
-                ms.before(self, &mut emit);
-                if let Some(side) = w.comp
-                    && side != self.comp
-                {
-                    self.comp = side;
-                    emit(OpKind::RadiusComp { side });
+                if self.corner.is_some() {
+                    let Some(m) = &motion else {
+                        return Err(here(ProgramError::Geometry(
+                            "RND/CHF must be followed by a block that moves".into(),
+                        )));
+                    };
+                    let m = self.resolve_corner(m, out)?;
+                    self.release();
+                    return self.finish_path(m, w, ms, plain, loc, out);
                 }
-                if let Some(m) = motion {
-                    self.commit(&m);
-                    emit(m);
+                self.release();
+                match motion {
+                    Some(m) => self.finish_path(m, w, ms, plain, loc, out),
+                    None => {
+                        let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
+                        if !plain {
+                            ms.before(self, &mut emit);
+                        }
+                        if let Some(side) = w.comp
+                            && side != self.comp
+                        {
+                            self.comp = side;
+                            emit(OpKind::RadiusComp { side });
+                        }
+                        if plain {
+                            return Ok(Flow::Continue);
+                        }
+                        ms.motion(self, w, &mut emit)?;
+                        Ok(ms.after(self, false, &mut emit))
+                    }
                 }
-                Ok(ms.after(self, false, &mut emit))
             }
+        }
+    }
+
+    /// Emits the M functions, compensation change and motion of a path block; the motion
+    /// becomes the held contour element.
+    #[inline(always)]
+    fn finish_path(
+        &mut self,
+        m: OpKind,
+        w: &Words,
+        ms: MWords,
+        plain: bool,
+        loc: SourceLoc,
+        out: &mut VecDeque<Op>,
+    ) -> Result<Flow, ExecError> {
+        let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
+        if !plain {
+            ms.before(self, &mut emit);
+        }
+        if let Some(side) = w.comp
+            && side != self.comp
+        {
+            self.comp = side;
+            emit(OpKind::RadiusComp { side });
+        }
+        self.commit(&m);
+        let contour = matches!(m, OpKind::Line { .. } | OpKind::Arc { .. });
+        out.push_back(Op { kind: m, loc });
+        if contour {
+            self.held_at = Some(out.len() - 1);
+        }
+        if plain {
+            return Ok(Flow::Continue);
+        }
+        let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
+        ms.motion(self, w, &mut emit)?;
+        Ok(ms.after(self, false, &mut emit))
+    }
+
+    /// BLK FORM: records the blank corners.
+    fn blk_form(&mut self, words: &Words, corner: u8, axis: Option<AxisLetter>) {
+        if corner == 0 {
+            return;
+        }
+        let mut b = self.blank.unwrap_or(Blank {
+            axis: None,
+            min: Pose::ZERO,
+            max: Pose::ZERO,
+        });
+        let mut p = if corner == 1 { b.min } else { b.max };
+        for a in AxisLetter::ALL {
+            if let Some(c) = &words.axes[a.index()] {
+                let v = self.length(a, self.params.value(c.value));
+                // incremental MAX point coordinates are relative to the MIN point
+                p[a] = if c.incremental { b.min[a] + v } else { v };
+            }
+        }
+        if corner == 1 {
+            b.min = p;
+            b.axis = axis.or(b.axis);
+        } else {
+            b.max = p;
+        }
+        self.blank = Some(b);
+    }
+
+    /// Label, calls and jumps: tells the interpreter where to go on.
+    fn flow(&mut self, stmt: &Stmt, text: &[u8]) -> Result<Flow, ExecError> {
+        match stmt {
+            Stmt::CallLbl { label, rep } => {
+                let key = LabelKey::from_ref(*label, text);
+                let rep = match rep {
+                    None => None,
+                    Some(v) => {
+                        let n = self.params.value(*v);
+                        if !(n >= 0.0 && n.fract() == 0.0 && n <= 65_534.0) {
+                            return Err(here(ProgramError::OutOfRange(format!(
+                                "REP {n} is not a whole number from 0 to 65534"
+                            ))));
+                        }
+                        Some(n as u32)
+                    }
+                };
+                if key == LabelKey::Num(0) {
+                    return Err(here(ProgramError::Geometry(
+                        "CALL LBL 0 is not allowed: LBL 0 ends a subprogram".into(),
+                    )));
+                }
+                Ok(Flow::Call { label: key, rep })
+            }
+            Stmt::CallPgm { start, end } => Ok(Flow::CallPgm(
+                text.get(*start as usize..*end as usize)
+                    .unwrap_or(&[])
+                    .iter()
+                    .map(|&b| char::from(b))
+                    .collect(),
+            )),
+            Stmt::Jump { a, cond, b, label } => {
+                let (x, y) = (self.params.value(*a), self.params.value(*b));
+                let jump = match cond {
+                    Cond::Equ => x == y,
+                    Cond::Ne => x != y,
+                    Cond::Gt => x > y,
+                    Cond::Lt => x < y,
+                };
+                Ok(if jump {
+                    Flow::Goto(LabelKey::from_ref(*label, text))
+                } else {
+                    Flow::Continue
+                })
+            }
+            _ => Ok(Flow::Continue),
         }
     }
 
@@ -346,7 +674,12 @@ impl Machine {
     }
 
     /// Updates position and end tangent after a motion op.
-    fn commit(&mut self, m: &OpKind) {
+    pub(super) fn commit(&mut self, m: &OpKind) {
+        if let OpKind::Line { feed, .. } | OpKind::Arc { feed, .. } | OpKind::Spline { feed, .. } =
+            m
+        {
+            self.last_feed = Some(*feed);
+        }
         match m {
             OpKind::Line { from, to, .. } => {
                 let mut d = [0.0; 9];
@@ -373,397 +706,24 @@ impl Machine {
                 self.tangent = Some(d);
                 self.pos = *to;
             }
+            OpKind::Spline { to, axes, .. } => {
+                // direction of travel at the end (t = 0): -K1 per axis
+                let mut d = [0.0; 9];
+                for ax in axes {
+                    d[ax.axis.index()] = -ax.k[2];
+                }
+                self.tangent = d.iter().any(|v| *v != 0.0).then_some(d);
+                self.pos = *to;
+            }
             _ => {}
         }
     }
 
-    fn need_feed(&self, f: Option<Feed>) -> Result<Feed, ExecError> {
+    pub(super) fn need_feed(&self, f: Option<Feed>) -> Result<Feed, ExecError> {
         f.ok_or_else(|| here(ProgramError::NoFeed))
     }
 
-    fn pole_for(&self, block: &'static str) -> Result<Pole, ExecError> {
+    pub(super) fn pole_for(&self, block: &'static str) -> Result<Pole, ExecError> {
         self.pole.ok_or_else(|| here(ProgramError::NoPole(block)))
-    }
-
-    fn direction(w: &Words, block: &'static str) -> Result<bool, ExecError> {
-        w.dr.map(|(ccw, _)| ccw).ok_or_else(|| {
-            here(ProgramError::Missing(match block {
-                "C" => "C needs the direction DR+ or DR-",
-                "CR" => "CR needs the direction DR+ or DR-",
-                _ => "CP needs the direction DR+ or DR-",
-            }))
-        })
-    }
-
-    /// Computes the motion op of a path block (None when nothing moves).
-    fn motion(&mut self, stmt: &Stmt, w: &Words) -> Result<Option<OpKind>, ExecError> {
-        let feed = self.feed(w.feed)?;
-        let from = self.pos;
-        match stmt {
-            Stmt::Line => {
-                let to = self.target(w);
-                if to == from {
-                    return Ok(None);
-                }
-                Ok(Some(OpKind::Line {
-                    from,
-                    to,
-                    feed: self.need_feed(feed)?,
-                }))
-            }
-            Stmt::LinePolar => {
-                let pole = self.pole_for("LP")?;
-                Self::no_plane_axes(w, pole.plane, "LP")?;
-                let (a, b, _) = pole.plane.axes();
-                let rel = geom::sub([from[a], from[b]], pole.centre);
-                let (r0, a0) = (geom::norm(rel), geom::angle(rel));
-                let r = match &w.pr {
-                    Some(c) => {
-                        let v = self.params.value(c.value) * self.scale;
-                        if c.incremental { r0 + v } else { v }
-                    }
-                    None => r0,
-                };
-                if r < 0.0 {
-                    return Err(at(
-                        w.pr.map_or(0, |c| c.pos),
-                        ProgramError::Geometry(format!("polar radius PR {r:.4} mm is negative")),
-                    ));
-                }
-                let ang = match &w.pa {
-                    Some(c) => {
-                        let v = self.params.value(c.value);
-                        if c.incremental { a0 + v } else { v }
-                    }
-                    None => a0,
-                };
-                let mut to = self.target(w);
-                let e = geom::polar(pole.centre, r, ang);
-                to[a] = e[0];
-                to[b] = e[1];
-                if to == from {
-                    return Ok(None);
-                }
-                Ok(Some(OpKind::Line {
-                    from,
-                    to,
-                    feed: self.need_feed(feed)?,
-                }))
-            }
-            Stmt::Circle => {
-                let pole = self.pole_for("C")?;
-                let ccw = Self::direction(w, "C")?;
-                let plane = pole.plane;
-                let (a, b, _) = plane.axes();
-                let mut to = self.target(w);
-                let s = [from[a], from[b]];
-                let mut e = [to[a], to[b]];
-                let rs = geom::norm(geom::sub(s, pole.centre));
-                let re = geom::norm(geom::sub(e, pole.centre));
-                if (rs - re).abs() > C_RADIUS_TOLERANCE {
-                    return Err(here(ProgramError::RadiusMismatch {
-                        start: rs,
-                        end: re,
-                        tol: C_RADIUS_TOLERANCE,
-                    }));
-                }
-                if rs < 1e-9 {
-                    return Err(here(ProgramError::Geometry(
-                        "C start point lies on CC: radius 0".into(),
-                    )));
-                }
-                let full = geom::norm(geom::sub(e, s)) < FULL_CIRCLE_EPS;
-                if full {
-                    e = s;
-                    to[a] = s[0];
-                    to[b] = s[1];
-                }
-                let sweep = geom::directed_sweep(
-                    geom::angle(geom::sub(s, pole.centre)),
-                    geom::angle(geom::sub(e, pole.centre)),
-                    ccw,
-                );
-                let sweep = if full {
-                    if ccw { 360.0 } else { -360.0 }
-                } else {
-                    sweep
-                };
-                Ok(Some(OpKind::Arc {
-                    from,
-                    to,
-                    center: pole.centre,
-                    plane,
-                    sweep,
-                    feed: self.need_feed(feed)?,
-                }))
-            }
-            Stmt::CircleRadius => {
-                let ccw = Self::direction(w, "CR")?;
-                let Some((rv, rpos)) = w.radius else {
-                    return Err(here(ProgramError::Missing("CR needs the radius R+ or R-")));
-                };
-                let r = self.params.value(rv) * self.scale;
-                if r == 0.0 || !r.is_finite() {
-                    return Err(at(
-                        rpos,
-                        ProgramError::Geometry("CR radius must not be 0".into()),
-                    ));
-                }
-                let plane = self.plane;
-                let (a, b, _) = plane.axes();
-                let to = self.target(w);
-                let s = [from[a], from[b]];
-                let e = [to[a], to[b]];
-                if geom::norm(geom::sub(e, s)) < FULL_CIRCLE_EPS {
-                    return Err(here(ProgramError::Geometry(
-                        "CR end point equals its start point: use C for a full circle".into(),
-                    )));
-                }
-                let (center, sweep) = geom::cr_arc(s, e, r, ccw).map_err(|chord| {
-                    here(ProgramError::ChordTooLong {
-                        chord,
-                        two_r: 2.0 * r.abs(),
-                    })
-                })?;
-                Ok(Some(OpKind::Arc {
-                    from,
-                    to,
-                    center,
-                    plane,
-                    sweep,
-                    feed: self.need_feed(feed)?,
-                }))
-            }
-            Stmt::CircleTangent => {
-                let plane = self.plane;
-                let (a, b, _) = plane.axes();
-                let t = self
-                    .tangent
-                    .map(|d| [d[a.index()], d[b.index()]])
-                    .filter(|t| geom::norm(*t) > 0.0)
-                    .ok_or_else(|| {
-                        here(ProgramError::Geometry(
-                            "CT needs a preceding contour element in the working plane".into(),
-                        ))
-                    })?;
-                let n = geom::norm(t);
-                let t = [t[0] / n, t[1] / n];
-                let to = self.target(w);
-                let s = [from[a], from[b]];
-                let e = [to[a], to[b]];
-                if geom::norm(geom::sub(e, s)) < FULL_CIRCLE_EPS {
-                    return Err(here(ProgramError::Geometry(
-                        "CT end point equals its start point".into(),
-                    )));
-                }
-                let (center, sweep) = geom::ct_arc(s, t, e).ok_or_else(|| {
-                    here(ProgramError::Geometry(
-                        "CT end point lies on the tangent: that is a straight line, not an arc"
-                            .into(),
-                    ))
-                })?;
-                Ok(Some(OpKind::Arc {
-                    from,
-                    to,
-                    center,
-                    plane,
-                    sweep,
-                    feed: self.need_feed(feed)?,
-                }))
-            }
-            Stmt::CirclePolar => {
-                let pole = self.pole_for("CP")?;
-                let ccw = Self::direction(w, "CP")?;
-                Self::no_plane_axes(w, pole.plane, "CP")?;
-                let plane = pole.plane;
-                let (a, b, _) = plane.axes();
-                let s = [from[a], from[b]];
-                let rel = geom::sub(s, pole.centre);
-                let r = geom::norm(rel);
-                if r < 1e-9 {
-                    return Err(here(ProgramError::Geometry(
-                        "CP start point lies on the pole CC: radius 0".into(),
-                    )));
-                }
-                let a0 = geom::angle(rel);
-                let Some(pa) = w.pa else {
-                    return Err(here(ProgramError::Missing("CP needs PA or IPA")));
-                };
-                let v = self.params.value(pa.value);
-                let sweep = if pa.incremental {
-                    if v.abs() > MAX_IPA {
-                        return Err(at(
-                            pa.pos,
-                            ProgramError::OutOfRange(format!("IPA{v:+} beyond ±{MAX_IPA} degrees")),
-                        ));
-                    }
-                    if v == 0.0 || (v > 0.0) != ccw {
-                        return Err(at(
-                            pa.pos,
-                            ProgramError::IpaSign {
-                                ipa: v,
-                                dr: if ccw { '+' } else { '-' },
-                            },
-                        ));
-                    }
-                    v
-                } else {
-                    geom::directed_sweep(a0, v, ccw)
-                };
-                let mut to = self.target(w);
-                let e = geom::polar(pole.centre, r, a0 + sweep);
-                to[a] = e[0];
-                to[b] = e[1];
-                Ok(Some(OpKind::Arc {
-                    from,
-                    to,
-                    center: pole.centre,
-                    plane,
-                    sweep,
-                    feed: self.need_feed(feed)?,
-                }))
-            }
-            _ => Ok(None),
-        }
-    }
-
-    /// CC: sets the pole. The plane follows the two axes programmed (X/Y → XY, Z/X → ZX,
-    /// Y/Z → YZ); with one axis or none it is the working plane, and missing coordinates come
-    /// from the previous pole in that plane, else from the current position. `I` words are
-    /// relative to the last programmed position.
-    fn centre(&mut self, w: &Words) -> Result<(), ExecError> {
-        let has = |ax: AxisLetter| w.axes[ax.index()].is_some();
-        let (x, y, z) = (has(AxisLetter::X), has(AxisLetter::Y), has(AxisLetter::Z));
-        let plane = match (x, y, z) {
-            (true, true, false) => Plane::XY,
-            (true, false, true) => Plane::ZX,
-            (false, true, true) => Plane::YZ,
-            (true, true, true) => {
-                let pos = w.axes[AxisLetter::Z.index()].map_or(0, |c| c.pos);
-                return Err(at(
-                    pos,
-                    ProgramError::Geometry("CC takes two coordinates of one plane".into()),
-                ));
-            }
-            _ => self.plane,
-        };
-        let (a, b, _) = plane.axes();
-        for ax in AxisLetter::ALL {
-            if ax != a
-                && ax != b
-                && let Some(c) = &w.axes[ax.index()]
-            {
-                return Err(at(
-                    c.pos,
-                    ProgramError::MisplacedWord {
-                        word: ax.to_string(),
-                        block: "CC",
-                    },
-                ));
-            }
-        }
-        let prev = self.pole.filter(|p| p.plane == plane);
-        let mut centre = [0.0; 2];
-        for (i, ax) in [a, b].into_iter().enumerate() {
-            centre[i] = match &w.axes[ax.index()] {
-                Some(c) => self.resolve(ax, c),
-                None => prev.map_or(self.pos[ax], |p| p.centre[i]),
-            };
-        }
-        self.pole = Some(Pole { plane, centre });
-        Ok(())
-    }
-
-    fn tool_call(
-        &mut self,
-        tc: &ToolCall,
-        text: &[u8],
-        emit: &mut impl FnMut(OpKind),
-    ) -> Result<(), ExecError> {
-        match tc.tool {
-            Some(ToolId::Number(v)) => {
-                let n = self.params.value(v);
-                if !(n >= 0.0 && n.fract() == 0.0 && n <= f64::from(u32::MAX)) {
-                    return Err(here(ProgramError::OutOfRange(format!(
-                        "tool number {n} is not a whole number from 0 to {}",
-                        u32::MAX
-                    ))));
-                }
-                self.tool = Some(n as u32);
-                self.tool_name = None;
-            }
-            Some(ToolId::Name(s, e)) => {
-                let name: String = text
-                    .get(s..e)
-                    .unwrap_or(&[])
-                    .iter()
-                    .map(|&b| char::from(b))
-                    .collect();
-                self.tool = Some(0);
-                self.tool_name = Some(name);
-            }
-            None => {}
-        }
-        if let Some(axis) = tc.axis {
-            match Plane::from_tool_axis(axis) {
-                Some(p) => {
-                    self.tool_axis = axis;
-                    self.plane = p;
-                }
-                None => {
-                    return Err(here(ProgramError::NotSupported(format!(
-                        "tool axis {axis}"
-                    ))));
-                }
-            }
-        }
-        let val = |v: Option<Value>| v.map(|v| self.params.value(v));
-        let length = val(tc.dl).unwrap_or(0.0) * self.scale;
-        let radius = val(tc.dr).unwrap_or(0.0) * self.scale;
-        if let Some(f) = val(tc.feed) {
-            if !(f > 0.0 && f.is_finite()) {
-                return Err(here(ProgramError::OutOfRange(format!(
-                    "feed rate F{f} must be positive"
-                ))));
-            }
-            self.fauto = Some(f * self.feed_scale() / 60.0);
-        }
-        let new_speed = val(tc.speed);
-        if let Some(s) = new_speed
-            && !(s >= 0.0 && s.is_finite())
-        {
-            return Err(here(ProgramError::OutOfRange(format!(
-                "spindle speed S{s} must not be negative"
-            ))));
-        }
-        emit(OpKind::ToolChange {
-            tool: self.tool.unwrap_or(0),
-            name: self.tool_name.clone(),
-            axis: self.tool_axis,
-            length,
-            radius,
-        });
-        // Q108: active tool radius, Q114: active tool length (program units)
-        self.params.set(
-            ParamRef {
-                kind: ParamKind::Q,
-                index: 108,
-            },
-            radius / self.scale,
-        );
-        self.params.set(
-            ParamRef {
-                kind: ParamKind::Q,
-                index: 114,
-            },
-            length / self.scale,
-        );
-        if let Some(s) = new_speed {
-            self.speed = s;
-            if self.spindle != SpindleDir::Off {
-                emit(self.spindle_op());
-            }
-        }
-        Ok(())
     }
 }

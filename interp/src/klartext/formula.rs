@@ -25,10 +25,7 @@ impl Parser {
         }
         let n = n as u32;
         if !matches!(n, 0..=8 | 13) {
-            return Ok(Stmt::Unsupported {
-                what: "FN",
-                number: Some(n),
-            });
+            return self.fn_other(lx, n);
         }
         let c = lx.next_token();
         if c.kind != TokKind::Colon {

@@ -102,6 +102,11 @@ impl<'a> Lexer<'a> {
         self.text.get(t.start()..t.end()).unwrap_or(&[])
     }
 
+    /// The whole block text.
+    pub fn text(&self) -> &'a [u8] {
+        self.text
+    }
+
     /// Bytes `start..end` of the block text.
     pub fn slice_range(&self, start: usize, end: usize) -> &'a [u8] {
         self.text.get(start..end).unwrap_or(&[])
@@ -137,6 +142,7 @@ impl<'a> Lexer<'a> {
     /// blank or the end of the block (`X+10`, `IY-Q2`, `F500`, `M8`, `DR+`, `RL`, `FMAX`,
     /// `PA+270`). Returns `None` for anything else, or when a token is peeked. The caller
     /// consumes the word with [`Lexer::set_pos`]`(word.end)` once it has used it.
+    #[inline]
     pub fn plain_word(&self) -> Option<PlainWord> {
         if self.peeked.is_some() {
             return None;
@@ -150,25 +156,36 @@ impl<'a> Lexer<'a> {
         while t.get(i).is_some_and(u8::is_ascii_uppercase) {
             i += 1;
         }
-        let name_end = i;
+        let mut name_end = i;
+        let mut param = false;
+        if name_end - start >= 2
+            && t.get(name_end - 1) == Some(&b'Q')
+            && t.get(name_end).is_some_and(u8::is_ascii_digit)
+        {
+            // `FQ58`, `XQ3`: the word, then the parameter without a sign
+            name_end -= 1;
+            param = true;
+        }
         if name_end == start || name_end - start > 4 {
             return None;
         }
         let mut sign = 0i8;
-        match t.get(i) {
-            Some(b'+') => {
-                sign = 1;
+        if !param {
+            match t.get(i) {
+                Some(b'+') => {
+                    sign = 1;
+                    i += 1;
+                }
+                Some(b'-') => {
+                    sign = -1;
+                    i += 1;
+                }
+                _ => {}
+            }
+            param = t.get(i) == Some(&b'Q');
+            if param {
                 i += 1;
             }
-            Some(b'-') => {
-                sign = -1;
-                i += 1;
-            }
-            _ => {}
-        }
-        let param = t.get(i) == Some(&b'Q');
-        if param {
-            i += 1;
         }
         let mut value = None;
         if t.get(i).is_some_and(u8::is_ascii_digit) {
@@ -193,6 +210,15 @@ impl<'a> Lexer<'a> {
             param,
             end: i,
         })
+    }
+
+    /// True when nothing but blanks is left and no token is peeked (cheap end-of-block test).
+    pub fn at_plain_end(&self) -> bool {
+        self.peeked.is_none()
+            && self
+                .text
+                .get(self.pos..)
+                .is_none_or(|rest| rest.iter().all(|&b| matches!(b, b' ' | b'\t' | b'\r')))
     }
 
     /// Continues scanning at byte `pos` (drops a peeked token).
@@ -343,26 +369,22 @@ const POW10: [f64; 23] = [
 
 /// Scans an unsigned decimal number starting at `start` (digits, optional `.`/`,` fraction).
 ///
-/// When all digits fit an integer below 2⁵³ and there are at most 22 decimals the result is
-/// correctly rounded (an exact integer divided by an exact power of ten); other numbers go
-/// through the standard parser.
+/// With at most 15 significant digits the result is correctly rounded (an exact integer
+/// divided by an exact power of ten); longer numbers go through the standard parser.
+#[inline]
 pub(crate) fn scan_number(text: &[u8], start: usize) -> (f64, usize) {
-    const EXACT: u64 = 1 << 53;
+    // Up to 15 significant digits always stay below 2^53, so the common case needs no
+    // overflow checks.
     let mut i = start;
     let mut mant: u64 = 0;
-    let mut exact = true;
-    let mut digit = |c: u8, mant: &mut u64| match mant
-        .checked_mul(10)
-        .and_then(|m| m.checked_add(u64::from(c - b'0')))
-    {
-        Some(m) if m < EXACT => *mant = m,
-        _ => exact = false,
-    };
+    let mut digits = 0usize;
     while let Some(&c) = text.get(i) {
-        if !c.is_ascii_digit() {
+        let d = c.wrapping_sub(b'0');
+        if d > 9 {
             break;
         }
-        digit(c, &mut mant);
+        mant = mant.wrapping_mul(10).wrapping_add(u64::from(d));
+        digits += 1;
         i += 1;
     }
     let mut frac = 0usize;
@@ -371,16 +393,19 @@ pub(crate) fn scan_number(text: &[u8], start: usize) -> (f64, usize) {
     {
         i += 1;
         while let Some(&c) = text.get(i) {
-            if !c.is_ascii_digit() {
+            let d = c.wrapping_sub(b'0');
+            if d > 9 {
                 break;
             }
-            digit(c, &mut mant);
+            mant = mant.wrapping_mul(10).wrapping_add(u64::from(d));
             frac += 1;
             i += 1;
         }
     }
-    if exact && let Some(p) = POW10.get(frac) {
-        // mant < 2^53 fits i64; the signed conversion is a single instruction
+    if digits + frac <= 15
+        && let Some(p) = POW10.get(frac)
+    {
+        // mant < 10^15 < 2^53 fits i64 exactly; the signed conversion is a single instruction
         let v = (mant as i64) as f64;
         return (if frac == 0 { v } else { v / p }, i);
     }
@@ -463,5 +488,36 @@ mod tests {
                 (Num, 2.5)
             ]
         );
+    }
+}
+
+#[cfg(test)]
+mod plain_word_tests {
+    use super::*;
+
+    /// The fast path reads the common word forms completely (name, sign, value, parameter).
+    #[test]
+    fn plain_words_of_common_forms() {
+        let cases: [(&str, &str, i8, Option<f64>, bool); 6] = [
+            ("X+Q1", "X", 1, Some(1.0), true),
+            ("Y-Q2", "Y", -1, Some(2.0), true),
+            ("FQ4", "F", 0, Some(4.0), true),
+            ("R+10", "R", 1, Some(10.0), false),
+            ("DR+", "DR", 1, None, false),
+            ("IX-0.5", "IX", -1, Some(0.5), false),
+        ];
+        for (text, name, sign, value, param) in cases {
+            let l = Lexer::new(text.as_bytes(), 0);
+            let w = l.plain_word().unwrap_or_else(|| panic!("{text}"));
+            assert_eq!(
+                &text.as_bytes()[w.start..w.name_end],
+                name.as_bytes(),
+                "{text}"
+            );
+            assert_eq!(
+                (w.sign, w.value, w.param, w.end),
+                (sign, value, param, text.len())
+            );
+        }
     }
 }

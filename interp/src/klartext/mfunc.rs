@@ -2,13 +2,22 @@
 //!
 //! Timing follows the TNC M-function table: M3, M4, M8, M13 and M14 act at block start, M5 and
 //! M9 at block end, M0 (stop, spindle off, coolant off), M1 (optional stop) and M2/M30 (end,
-//! spindle off, coolant off) after the block's motion. Other M numbers are reported as not
-//! supported when their block runs.
+//! spindle off, coolant off) after the block's motion.
+//!
+//! Motion-related functions: M91 (coordinates of this block relative to the machine datum) and
+//! M92 (relative to the machine's fixed position) are accepted; the built-in machines have no
+//! presets or datum shifts, so both leave the coordinates as programmed. M126 makes absolute
+//! rotary moves take the shorter way (less than 180°), M127 switches that off again. M140
+//! retracts along the tool axis after the block's motion: `MB d` by d (rapid), `MB MAX` to the
+//! travel limit when the interpreter knows it. M97 and M98 (small contour steps, open contour
+//! corners) are accepted as hints for the compensation stage and change nothing here; M6 is
+//! accepted and does nothing (TOOL CALL changes the tool). Any other M number is reported as
+//! not supported on this machine.
 
 use super::exec::{ExecError, Flow, Machine, at};
 use super::parser::Words;
 use crate::diag::ProgramError;
-use crate::op::{OpKind, SpindleDir};
+use crate::op::{Feed, OpKind, SpindleDir};
 
 /// The M words of one block, sorted by when they act.
 #[derive(Debug, Default)]
@@ -20,6 +29,9 @@ pub(super) struct MWords {
     stop: bool,
     optional_stop: bool,
     end: bool,
+    retract: bool,
+    retract_pos: u32,
+    shortest: Option<bool>,
 }
 
 impl MWords {
@@ -43,10 +55,23 @@ impl MWords {
                     m.spindle_on = Some(SpindleDir::Ccw);
                     m.coolant_on = true;
                 }
+                6 | 91 | 92 | 97 | 98 => {}
+                126 | 127 => m.shortest = Some(num == 126),
+                140 => {
+                    m.retract = true;
+                    m.retract_pos = pos;
+                }
                 other => return Err(at(pos, ProgramError::UnsupportedM(other))),
             }
         }
         Ok(m)
+    }
+
+    /// Modal switches that already apply to the block's own coordinates (M126/M127).
+    pub(super) fn modal(&self, mc: &mut Machine) {
+        if let Some(on) = self.shortest {
+            mc.shortest_rotary = on;
+        }
     }
 
     /// Ops acting at block start.
@@ -59,6 +84,52 @@ impl MWords {
             mc.coolant = true;
             emit(OpKind::Coolant { on: true });
         }
+    }
+
+    /// M140: the retract along the tool axis after the block's motion.
+    pub(super) fn motion(
+        &self,
+        mc: &mut Machine,
+        w: &Words,
+        emit: &mut impl FnMut(OpKind),
+    ) -> Result<(), ExecError> {
+        if !self.retract {
+            return Ok(());
+        }
+        let axis = mc.tool_axis;
+        let target = match w.mb {
+            Some(Some(v)) => mc.pos[axis] + mc.params.value(v) * mc.unit,
+            Some(None) => match mc.retract_limit {
+                Some(limit) => limit,
+                None => {
+                    return Err(at(
+                        self.retract_pos,
+                        ProgramError::NotSupported(
+                            "M140 MB MAX without a known travel limit of the tool axis".into(),
+                        ),
+                    ));
+                }
+            },
+            None => {
+                return Err(at(
+                    self.retract_pos,
+                    ProgramError::Missing("M140 needs MB (retract distance or MAX)"),
+                ));
+            }
+        };
+        let from = mc.pos;
+        let mut to = from;
+        to[axis] = target;
+        if to != from {
+            mc.pos = to;
+            mc.last_feed = Some(Feed::Rapid);
+            emit(OpKind::Line {
+                from,
+                to,
+                feed: Feed::Rapid,
+            });
+        }
+        Ok(())
     }
 
     /// Ops acting after the motion; `stop_block` for STOP.

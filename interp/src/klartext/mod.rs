@@ -1,5 +1,7 @@
-//! TNC conversational (Klartext) programs: lexer, parser, executor and arc geometry.
+//! TNC conversational (Klartext) programs: lexer, parser, executor, contour geometry,
+//! program structure (labels, calls, jumps), system data and the tool table.
 
+pub(crate) mod contour;
 pub(crate) mod exec;
 pub(crate) mod expr;
 pub(crate) mod formula;
@@ -7,4 +9,8 @@ pub(crate) mod geom;
 pub(crate) mod lexer;
 pub(crate) mod mfunc;
 pub(crate) mod parser;
+pub(crate) mod paths;
+pub(crate) mod structure;
+pub(crate) mod system;
+pub(crate) mod tools;
 pub(crate) mod words;

@@ -5,14 +5,13 @@
 //! running it. Formulas are compiled into the parser's reused postfix buffer ([`Parser::code`]).
 //!
 //! Tolerated forms seen in real files: optional block number (also `N12`), `/` block skip
-//! before or after the number, spaces inside words, `R`/`F`/`M` without a value (old exports:
-//! `R` alone is R0, an empty `F` or `M` is ignored), `F MAX`, decimal commas, `* - text`
-//! headlines, `;` comments and `( … )` comment headers. Block types that belong to later
-//! milestones (cycles, labels, calls, APPR/DEP, RND, CHF, SPL, FK, …) are recognised by their
-//! keyword and reported as not supported when executed; their words are not checked yet.
+//! before or after the number, spaces inside words, `R`/`F`/`M`/`REP` without a value (old
+//! exports: `R` alone is R0, an empty `F`, `M` or `REP` is ignored), `F MAX`, decimal commas,
+//! `* - text` headlines, `;` comments and `( … )` comment headers. Block types of later
+//! milestones (cycles, FK, PLANE, patterns, …) are recognised by their keyword and reported as
+//! not supported when executed; their words are not checked yet.
 
 use super::lexer::{Lexer, TokKind, Token};
-use super::words::split_q;
 use crate::diag::ProgramError;
 use crate::klartext::expr::{MAX_PARAM, ParamKind, ParamRef, Rpn, Value};
 use crate::op::{AxisLetter, CompSide};
@@ -65,9 +64,50 @@ pub(crate) struct Words {
     pub m_count: u8,
     /// Byte position of each M word.
     pub m_pos: [u32; MAX_M],
+    /// Bit `i` set when `axes[i]` holds a word (lets [`Words::clear`] touch only those).
+    pub axes_set: u16,
+    /// LEN of APPR/DEP, with the word position.
+    pub len: Option<(Value, u32)>,
+    /// CCA of APPR/DEP CT, with the word position.
+    pub cca: Option<(Value, u32)>,
+    /// Paraxial compensation R+ (true) or R- (false), with the word position.
+    pub paraxial: Option<(bool, u32)>,
+    /// M140 retract distance: `Some(None)` for MB MAX.
+    pub mb: Option<Option<Value>>,
 }
 
 impl Words {
+    /// Forgets the words of the previous block. Only the slots that were filled are reset,
+    /// which keeps the per-block cost independent of the record's size.
+    pub fn clear(&mut self) {
+        let mut mask = self.axes_set;
+        while mask != 0 {
+            let i = mask.trailing_zeros() as usize;
+            if let Some(slot) = self.axes.get_mut(i) {
+                *slot = None;
+            }
+            mask &= mask - 1;
+        }
+        self.axes_set = 0;
+        self.pr = None;
+        self.pa = None;
+        self.dr = None;
+        self.radius = None;
+        self.comp = None;
+        self.feed = None;
+        self.m_count = 0;
+        self.len = None;
+        self.cca = None;
+        self.paraxial = None;
+        self.mb = None;
+    }
+
+    /// Stores an axis word.
+    pub fn set_axis(&mut self, axis: AxisLetter, c: Coord) {
+        self.axes[axis.index()] = Some(c);
+        self.axes_set |= 1 << axis.index();
+    }
+
     /// The M words programmed, with their positions.
     pub fn m_words(&self) -> impl Iterator<Item = (u32, u32)> + '_ {
         let n = usize::from(self.m_count).min(MAX_M);
@@ -152,8 +192,85 @@ pub(crate) enum Stmt {
     Misc,
     /// `STOP [M…]`.
     Stop,
-    /// `LBL …`: a jump target, no action when reached.
-    Label,
+    /// `LBL n` / `LBL "name"`: a jump target; `LBL 0` ends a subprogram.
+    Label(LabelRef),
+    /// `CALL LBL n [REP k]`: subprogram call, or section repeat with REP.
+    CallLbl {
+        /// The label called.
+        label: LabelRef,
+        /// Number of repeats (REP), when programmed.
+        rep: Option<Value>,
+    },
+    /// `CALL PGM path`: the path as a byte range of the block text.
+    CallPgm {
+        /// First byte of the path.
+        start: u32,
+        /// One past its last byte.
+        end: u32,
+    },
+    /// `FN 9..12: IF a cond b GOTO LBL label`.
+    Jump {
+        /// Left operand.
+        a: Value,
+        /// Comparison.
+        cond: Cond,
+        /// Right operand.
+        b: Value,
+        /// Target.
+        label: LabelRef,
+    },
+    /// `FN 14: ERROR = n`.
+    FnError {
+        /// Error number.
+        code: Value,
+    },
+    /// `FN 15: PRINT …` (`file` false) or `FN 16: F-PRINT …` (`file` true): the text after
+    /// the keyword as a byte range.
+    Print {
+        /// True for FN 16.
+        file: bool,
+        /// First byte of the argument text.
+        start: u32,
+        /// One past its last byte.
+        end: u32,
+    },
+    /// `FN 18: SYSREAD Qn = ID.. NR.. [IDX..]`.
+    SysRead {
+        /// The parameter written.
+        target: ParamRef,
+        /// Group number ID.
+        id: Value,
+        /// System data number NR.
+        nr: Value,
+        /// Index IDX (0 when absent).
+        idx: Option<Value>,
+    },
+    /// `TOOL DEF n [L..] [R..]`: tool preselection, or an in-program tool definition.
+    ToolDef {
+        /// Tool number, when written as a number or parameter.
+        number: Option<Value>,
+        /// Length L.
+        length: Option<Value>,
+        /// Radius R.
+        radius: Option<Value>,
+    },
+    /// `RND R..`: tangential rounding between the neighbouring contour elements.
+    Round,
+    /// `CHF len`: chamfer between the neighbouring lines; the length is in [`Words::radius`].
+    Chamfer,
+    /// `CTP PR.. PA..`: tangential arc to a polar end point.
+    CircleTangentPolar,
+    /// `SPL …`: spline; end point and coefficients in [`Parser::spline`].
+    Spline,
+    /// `APPR …` (approach) or `DEP …` (departure).
+    ApproachDepart {
+        /// True for APPR.
+        approach: bool,
+        /// Path shape.
+        kind: ApprKind,
+        /// True for the polar variants (PLT, PLN, PCT, PLCT).
+        polar: bool,
+    },
     /// A block type recognised but not implemented yet.
     Unsupported {
         /// Its keyword.
@@ -161,6 +278,51 @@ pub(crate) enum Stmt {
         /// Function number (FN n) when relevant.
         number: Option<u32>,
     },
+}
+
+/// A label as written: a number or a quoted name (byte range in the block text).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum LabelRef {
+    /// `LBL n`.
+    Num(u32),
+    /// `LBL "name"`.
+    Name(u32, u32),
+}
+
+/// The comparison of a conditional jump.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Cond {
+    /// FN 9: equal.
+    Equ,
+    /// FN 10: not equal.
+    Ne,
+    /// FN 11: greater than.
+    Gt,
+    /// FN 12: less than.
+    Lt,
+}
+
+/// The path shape of an APPR or DEP block.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum ApprKind {
+    /// LT: tangential line.
+    Lt,
+    /// LN: line perpendicular to the contour.
+    Ln,
+    /// CT: tangential arc.
+    Ct,
+    /// LCT: line, then an arc tangent to it and to the contour.
+    Lct,
+}
+
+/// Spline coefficients of one axis: value and decimal exponent, K3, K2, K1.
+pub(crate) type SplineCoef = Option<(Value, i32)>;
+
+/// The words of an SPL block.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct SplineWords {
+    /// `[K3, K2, K1]` per axis, indexed by [`AxisLetter::index`].
+    pub k: [[SplineCoef; 3]; 9],
 }
 
 /// One parsed block.
@@ -190,14 +352,15 @@ pub(crate) struct ParseError {
 pub(super) type PResult<T> = Result<T, (usize, ProgramError)>;
 
 // Word classes a block type accepts.
-pub(super) const W_AXES: u8 = 1;
-pub(super) const W_POLAR: u8 = 2;
-pub(super) const W_DR: u8 = 4;
-pub(super) const W_RADIUS: u8 = 8;
-pub(super) const W_COMP: u8 = 16;
-pub(super) const W_FEED: u8 = 32;
-pub(super) const W_M: u8 = 64;
-pub(super) const PATH: u8 = W_COMP | W_FEED | W_M;
+pub(super) const W_AXES: u16 = 1;
+pub(super) const W_POLAR: u16 = 2;
+pub(super) const W_DR: u16 = 4;
+pub(super) const W_RADIUS: u16 = 8;
+pub(super) const W_COMP: u16 = 16;
+pub(super) const W_FEED: u16 = 32;
+pub(super) const W_M: u16 = 64;
+pub(super) const W_APPR: u16 = 128;
+pub(super) const PATH: u16 = W_COMP | W_FEED | W_M;
 
 /// Deepest parenthesis/function nesting accepted in a formula.
 pub(super) const MAX_DEPTH: u32 = 64;
@@ -211,6 +374,8 @@ pub(crate) struct Parser {
     pub words: Words,
     /// Words of the last parsed TOOL CALL.
     pub tool: ToolCall,
+    /// Coefficients of the last parsed SPL block.
+    pub spline: SplineWords,
 }
 
 /// Upper-cases an identifier into a small stack buffer (longer ones are cut, which makes them
@@ -364,15 +529,16 @@ impl Parser {
         let mut skip = false;
         let res;
         let start;
-        if is_comment_block(text) {
-            start = lx.peek().start();
-            res = Ok(Stmt::Empty);
-        } else if let Some(p) = plain_prefix(text) {
+        if let Some(p) = plain_prefix(text) {
             // common form `12 L …`: no need for the token machinery to find the keyword
+            // (a keyword followed by a blank is never a comment block)
             start = p.start;
             number = p.number;
             let kw = Token::new(TokKind::Ident, p.keyword.0, p.keyword.1);
             res = self.dispatch(&mut lx, kw);
+        } else if is_comment_block(text) {
+            start = lx.peek().start();
+            res = Ok(Stmt::Empty);
         } else {
             start = lx.peek().start();
             res = self.parse_inner(&mut lx, &mut number, &mut skip);
@@ -476,7 +642,7 @@ impl Parser {
                         self.tool = self.tool_call(lx)?;
                         Ok(Stmt::ToolCall)
                     }
-                    (TokKind::Ident, b"DEF") => unsupported("TOOL DEF"),
+                    (TokKind::Ident, b"DEF") => self.tool_def(lx),
                     _ => Err((
                         w.start(),
                         ProgramError::Missing("expected CALL or DEF after TOOL"),
@@ -524,7 +690,7 @@ impl Parser {
                 self.words(lx, W_M, "STOP")?;
                 Ok(Stmt::Stop)
             }
-            b"LBL" => Ok(Stmt::Label),
+            b"LBL" => Ok(Stmt::Label(self.label_ref(lx, t.start())?)),
             b"FN" => self.function(lx),
             b"Q" | b"QL" | b"QR" => {
                 let kind = param_kind(kw).unwrap_or(ParamKind::Q);
@@ -532,14 +698,23 @@ impl Parser {
                 self.assignment(lx, target)
             }
             b"QS" => unsupported("QS string parameters"),
-            b"CALL" => unsupported("CALL"),
+            b"CALL" => self.call(lx, t.start()),
             b"CYCL" => unsupported("CYCL"),
-            b"APPR" => unsupported("APPR"),
-            b"DEP" => unsupported("DEP"),
-            b"RND" => unsupported("RND"),
-            b"CHF" => unsupported("CHF"),
-            b"SPL" => unsupported("SPL"),
-            b"CTP" => unsupported("CTP"),
+            b"APPR" => self.approach(lx, true),
+            b"DEP" => self.approach(lx, false),
+            b"RND" => {
+                self.words(lx, W_RADIUS | W_FEED, "RND")?;
+                if self.words.radius.is_none() {
+                    return Err((t.start(), ProgramError::Missing("RND needs the radius R")));
+                }
+                Ok(Stmt::Round)
+            }
+            b"CHF" => self.chamfer(lx, t.start()),
+            b"SPL" => self.spline(lx),
+            b"CTP" => {
+                self.words(lx, W_AXES | W_POLAR | PATH, "CTP")?;
+                Ok(Stmt::CircleTangentPolar)
+            }
             b"FPOL" | b"FL" | b"FLT" | b"FC" | b"FCT" | b"FK" | b"FSELECT" => {
                 unsupported("FK free contour programming")
             }
@@ -599,124 +774,6 @@ impl Parser {
             )),
             None => Ok(false),
         }
-    }
-
-    fn blk_form(&mut self, lx: &mut Lexer<'_>) -> PResult<Stmt> {
-        let t = lx.peek();
-        let v = if t.kind == TokKind::Num {
-            lx.num(t)
-        } else {
-            0.0
-        };
-        let corner = match t.kind {
-            TokKind::Num if (v - 0.1).abs() < 1e-9 => 1,
-            TokKind::Num if (v - 0.2).abs() < 1e-9 => 2,
-            _ => {
-                return Ok(Stmt::BlkForm {
-                    corner: 0,
-                    axis: None,
-                });
-            }
-        };
-        lx.next_token();
-        let mut axis = None;
-        if corner == 1 {
-            let a = lx.peek();
-            if a.kind == TokKind::Ident {
-                let s = lx.slice(a);
-                let next_is_value = matches!(
-                    lx.byte_at(a.end()),
-                    Some(b'+' | b'-' | b'0'..=b'9' | b'.' | b',')
-                );
-                if s.len() == 1 && !next_is_value {
-                    axis = axis_of(s[0].to_ascii_uppercase());
-                    if axis.is_some() {
-                        lx.next_token();
-                    }
-                }
-            }
-        }
-        self.words(lx, W_AXES, "BLK FORM")?;
-        Ok(Stmt::BlkForm { corner, axis })
-    }
-
-    fn tool_call(&mut self, lx: &mut Lexer<'_>) -> PResult<ToolCall> {
-        let mut tc = ToolCall::default();
-        let t = lx.peek();
-        match t.kind {
-            TokKind::Num => {
-                lx.next_token();
-                tc.tool = Some(ToolId::Number(Value::Num(lx.num(t))));
-            }
-            TokKind::Str => {
-                lx.next_token();
-                tc.tool = Some(ToolId::Name(t.start(), t.end()));
-            }
-            TokKind::Ident => {
-                let (u, n) = upper(lx.slice(t));
-                if let Some(kind) = param_kind(&u[..n]) {
-                    lx.next_token();
-                    let param = param_index(lx, kind, t.start())?;
-                    tc.tool = Some(ToolId::Number(Value::Param {
-                        param,
-                        negate: false,
-                    }));
-                }
-            }
-            _ => {}
-        }
-        let a = lx.peek();
-        if a.kind == TokKind::Ident {
-            let s = lx.slice(a);
-            if s.len() == 1 {
-                let c = s[0].to_ascii_uppercase();
-                if matches!(c, b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W') {
-                    lx.next_token();
-                    tc.axis = axis_of(c);
-                }
-            }
-        }
-        loop {
-            let t = lx.next_token();
-            match t.kind {
-                TokKind::End => break,
-                TokKind::Ident => {}
-                _ => return Err(unexpected(lx, t)),
-            }
-            let (u, n) = upper(lx.slice(t));
-            let (name, q) = split_q(&u[..n], |w| matches!(w, b"S" | b"F" | b"DL" | b"DR"));
-            let v = match q {
-                Some(kind) => Value::Param {
-                    param: param_index(lx, kind, t.start())?,
-                    negate: false,
-                },
-                None if name == b"DR" && lx.byte_at(t.end()) == Some(b'2') => {
-                    // DR2: the lexer split it into `DR` and the number; re-scan from after '2'
-                    let _ = lx.next_token();
-                    let v = required(lx, "DR2", t.start())?;
-                    set_once(&mut tc.dr2, v, "DR2", t.start())?;
-                    continue;
-                }
-                None => required(lx, &text_of(name), t.start())?,
-            };
-            let slot = match name {
-                b"S" => &mut tc.speed,
-                b"F" => &mut tc.feed,
-                b"DL" => &mut tc.dl,
-                b"DR" => &mut tc.dr,
-                _ => {
-                    return Err((
-                        t.start(),
-                        ProgramError::UnknownWord {
-                            word: text_of(lx.slice(t)),
-                            block: "TOOL CALL",
-                        },
-                    ));
-                }
-            };
-            set_once(slot, v, &text_of(name), t.start())?;
-        }
-        Ok(tc)
     }
 }
 

@@ -3,8 +3,8 @@
 use super::expr::{ParamKind, ParamRef, Value};
 use super::lexer::{Lexer, PlainWord, TokKind};
 use super::parser::{
-    Coord, FeedWord, MAX_M, PResult, Parser, Val, W_AXES, W_COMP, W_DR, W_FEED, W_M, W_POLAR,
-    W_RADIUS, Words, axis_of, param_index, text_of, unexpected, upper, value,
+    Coord, FeedWord, MAX_M, PResult, Parser, Val, W_APPR, W_AXES, W_COMP, W_DR, W_FEED, W_M,
+    W_POLAR, W_RADIUS, Words, axis_of, param_index, text_of, unexpected, upper, value,
 };
 use crate::diag::ProgramError;
 use crate::klartext::expr::MAX_PARAM;
@@ -15,12 +15,15 @@ impl Parser {
     pub(super) fn words(
         &mut self,
         lx: &mut Lexer<'_>,
-        allowed: u8,
+        allowed: u16,
         block: &'static str,
     ) -> PResult<()> {
         let w = &mut self.words;
-        *w = Words::default();
+        w.clear();
         loop {
+            if lx.at_plain_end() {
+                return Ok(());
+            }
             // fast path for the common plain forms `X+10`, `IY-Q2`, `F500`
             if let Some(pw) = lx.plain_word()
                 && plain(w, lx.slice_range(pw.start, pw.name_end), &pw, allowed)
@@ -173,13 +176,35 @@ impl Parser {
                     }
                 },
                 b"MB" => {
-                    // M140 MB: the retract distance; M140 itself is reported when executed.
-                    if matches!(val, Val::None) {
-                        let t2 = lx.peek();
-                        if t2.kind == TokKind::Ident && lx.slice(t2).eq_ignore_ascii_case(b"MAX") {
-                            lx.next_token();
-                        }
+                    // M140 MB: the retract distance, or MB MAX
+                    if w.mb.is_some() {
+                        return dup();
                     }
+                    w.mb = Some(match val {
+                        Val::Some(v) => Some(v),
+                        _ => {
+                            let t2 = lx.peek();
+                            if t2.kind == TokKind::Ident
+                                && lx.slice(t2).eq_ignore_ascii_case(b"MAX")
+                            {
+                                lx.next_token();
+                                None
+                            } else {
+                                return Err((t.start(), ProgramError::MissingValue("MB".into())));
+                            }
+                        }
+                    });
+                }
+                b"LEN" | b"CCA" => {
+                    let slot = if name == b"LEN" {
+                        &mut w.len
+                    } else {
+                        &mut w.cca
+                    };
+                    if slot.is_some() {
+                        return dup();
+                    }
+                    *slot = Some((need(val)?, pos));
                 }
                 _ => {
                     // axis words X..W, IX..IW
@@ -197,15 +222,15 @@ impl Parser {
                             },
                         ));
                     };
-                    let slot = &mut w.axes[axis.index()];
-                    if slot.is_some() {
+                    if w.axes[axis.index()].is_some() {
                         return dup();
                     }
-                    *slot = Some(Coord {
+                    let c = Coord {
                         value: need(val)?,
                         incremental: inc,
                         pos,
-                    });
+                    };
+                    w.set_axis(axis, c);
                 }
             }
         }
@@ -213,10 +238,11 @@ impl Parser {
 
     /// `R` word: CR radius, or radius compensation off.
     ///
-    /// In CR blocks a signed value or a parameter is the radius; `R0` (unsigned zero) and `R`
-    /// alone switch compensation off. Elsewhere `R`/`R0` mean R0 and `R+`/`R-` (paraxial
-    /// compensation) are not supported yet.
-    fn r_word(w: &mut Words, val: Val, allowed: u8, at: usize) -> PResult<()> {
+    /// In CR, RND, CHF and APPR/DEP blocks a value or a parameter is the radius; `R0`
+    /// (unsigned zero) and `R` alone switch compensation off. Elsewhere `R`/`R0` mean R0 and
+    /// `R+`/`R-` (no value) select paraxial compensation: lengthen or shorten the move by the
+    /// tool radius.
+    fn r_word(w: &mut Words, val: Val, allowed: u16, at: usize) -> PResult<()> {
         let comp_off = |w: &mut Words| {
             if w.comp.is_some() {
                 return Err((at, ProgramError::DuplicateWord("R0".into())));
@@ -234,10 +260,13 @@ impl Parser {
                 w.radius = Some((v, at as u32));
                 Ok(())
             }
-            Val::Sign(_) => Err((
-                at,
-                ProgramError::NotSupported("paraxial compensation R+/R-".into()),
-            )),
+            Val::Sign(neg) => {
+                if w.paraxial.is_some() || w.comp.is_some() {
+                    return Err((at, ProgramError::DuplicateWord("R".into())));
+                }
+                w.paraxial = Some((!neg, at as u32));
+                Ok(())
+            }
             Val::Some(_) => Err((
                 at,
                 ProgramError::Unexpected("value after R (only R0, RL or RR here)".into()),
@@ -249,7 +278,8 @@ impl Parser {
 /// Stores a word seen by the lexer's fast path when it is one of the common, valid forms;
 /// returns false (nothing stored) otherwise, and the token path then reads the word and
 /// reports any error, so both paths give the same results.
-fn plain(w: &mut Words, name: &[u8], pw: &PlainWord, allowed: u8) -> bool {
+#[inline]
+fn plain(w: &mut Words, name: &[u8], pw: &PlainWord, allowed: u16) -> bool {
     let value = || -> Option<Value> {
         let v = pw.value?;
         Some(if pw.param {
@@ -269,18 +299,22 @@ fn plain(w: &mut Words, name: &[u8], pw: &PlainWord, allowed: u8) -> bool {
     };
     let pos = pw.start as u32;
     match name {
-        [letter] | [b'I', letter] if allowed & W_AXES != 0 => {
+        // (the guard checks the letter, so that F, M and R fall through to their own arms)
+        [letter] | [b'I', letter] if allowed & W_AXES != 0 && axis_of(*letter).is_some() => {
             let Some(axis) = axis_of(*letter) else {
                 return false;
             };
             let (Some(value), None) = (value(), w.axes[axis.index()]) else {
                 return false;
             };
-            w.axes[axis.index()] = Some(Coord {
-                value,
-                incremental: name.len() == 2,
-                pos,
-            });
+            w.set_axis(
+                axis,
+                Coord {
+                    value,
+                    incremental: name.len() == 2,
+                    pos,
+                },
+            );
             true
         }
         b"F" if allowed & W_FEED != 0 && w.feed.is_none() => match value() {
@@ -306,6 +340,14 @@ fn plain(w: &mut Words, name: &[u8], pw: &PlainWord, allowed: u8) -> bool {
                 _ => false,
             }
         }
+        b"R" if allowed & W_RADIUS != 0 && w.radius.is_none() && pw.sign != 0 => match value() {
+            // `R+0` stays with the token path, which reads it as R0
+            Some(v) if v != Value::Num(0.0) => {
+                w.radius = Some((v, pos));
+                true
+            }
+            _ => false,
+        },
         b"DR" if allowed & W_DR != 0 && w.dr.is_none() && pw.sign != 0 && pw.value.is_none() => {
             w.dr = Some((pw.sign > 0, pos));
             true
@@ -367,7 +409,7 @@ pub(super) fn split_q(name: &[u8], known: impl Fn(&[u8]) -> bool) -> (&[u8], Opt
 }
 
 /// The class bit of a path-block word (0 = unknown).
-fn word_class(name: &[u8]) -> u8 {
+fn word_class(name: &[u8]) -> u16 {
     match name {
         b"X" | b"Y" | b"Z" | b"A" | b"B" | b"C" | b"U" | b"V" | b"W" => W_AXES,
         b"IX" | b"IY" | b"IZ" | b"IA" | b"IB" | b"IC" | b"IU" | b"IV" | b"IW" => W_AXES,
@@ -377,6 +419,7 @@ fn word_class(name: &[u8]) -> u8 {
         b"RL" | b"RR" => W_COMP,
         b"F" | b"FMAX" | b"FAUTO" => W_FEED,
         b"M" | b"MB" => W_M,
+        b"LEN" | b"CCA" => W_APPR,
         _ => 0,
     }
 }

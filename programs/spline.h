@@ -1,0 +1,16 @@
+0  BEGIN PGM SPLINE MM
+; Spline blocks as a CAM post-processor writes them: end point, then K3, K2, K1 per axis
+; (t runs from 1 to 0, so the start is end + K3 + K2 + K1 and equals the previous end point).
+1  BLK FORM 0.1 Z X+0 Y+0 Z-10
+2  BLK FORM 0.2 X+40 Y+30 Z+0
+3  TOOL CALL 1 Z S8000
+4  L Z+5 R0 FMAX M3
+5  L X+28.338 Y+19.385 FMAX
+6  L Z-0.5 F500
+7  SPL X24.875 Y15.924 Z-0.5 ~
+   K3X-4.688E-002 K2X2.459E-002 K1X3.486E+000 ~
+   K3Y-4.563E-002 K2Y2.155E-002 K1Y3.486E+000 ~
+   K3Z0.000E+000 K2Z0.000E+000 K1Z0.000E+000 F1000
+8  SPL X+21.875 Y+12.924 K3X+0 K2X+0 K1X+3 E+000 K3Y+0 K2Y+0 K1Y+0.3 E1
+9  L Z+5 FMAX M30
+10 END PGM SPLINE MM
