@@ -8,7 +8,7 @@
 use klar_drivers::cia402::{CanOpenConfig, DriveConfig};
 use klar_drivers::modbus::{ModbusServoConfig, ModbusVfdConfig};
 use klar_drivers::stepdir::StepDirConfig;
-use klar_interp::AxisLetter;
+use klar_interp::{AxisLetter, Diagnostic, Interpreter, Pose, Tool, ToolTable};
 use klar_motion::AxisLimits;
 use klar_motion::kinematics::{Cartesian, Kinematics, Lathe};
 use klar_sim::plant::SimAxisParams;
@@ -252,6 +252,13 @@ pub struct MachineConfig {
     /// The tool table: when present, a TOOL CALL of a tool not listed is an error.
     #[serde(default, rename = "tool")]
     pub tools: Option<Vec<ToolConfig>>,
+    /// A HEIDENHAIN tool table file (TOOL.T columns T, NAME, L, R, R2, DL, DR, DR2), relative
+    /// to the machine file; its tools join the `[[tool]]` entries.
+    #[serde(default)]
+    pub tool_table: Option<std::path::PathBuf>,
+    /// The folder of the machine file (relative paths in it are resolved from here).
+    #[serde(skip)]
+    pub base_dir: Option<std::path::PathBuf>,
     /// Faults injected into the simulated axes (see docs/safety.md).
     #[serde(default, rename = "fault")]
     pub faults: Vec<crate::faults::FaultConfig>,
@@ -267,9 +274,15 @@ fn default_true() -> bool {
 pub struct ToolConfig {
     /// Tool number as TOOL CALL names it.
     pub number: u32,
-    /// Tool name, for reports.
+    /// Tool name (TOOL CALL "name" finds it).
     #[serde(default)]
     pub name: Option<String>,
+    /// Tool length L, mm.
+    #[serde(default)]
+    pub length: f64,
+    /// Tool radius R, mm (radius compensation uses it, plus DR from TOOL CALL).
+    #[serde(default)]
+    pub radius: f64,
 }
 
 /// What can be wrong with a machine file.
@@ -315,7 +328,14 @@ impl MachineConfig {
             path: shown.clone(),
             source,
         })?;
-        Self::parse(&shown, &text)
+        let mut config = Self::parse(&shown, &text)?;
+        config.base_dir = path.parent().map(Path::to_path_buf);
+        // Read the tool table now, so that a bad file is refused with the machine file.
+        config.tool_table().map_err(|message| ConfigError::Invalid {
+            path: shown,
+            message,
+        })?;
+        Ok(config)
     }
 
     /// Parses and validates machine TOML; `name` is used in messages.
@@ -362,6 +382,47 @@ impl MachineConfig {
             Some(klar_interp::Dialect::LatheDin) => Self::builtin_lathe(),
             _ => Self::builtin_mill(),
         }
+    }
+
+    /// The machine's tool table: the `tool_table` file, then the `[[tool]]` entries (which
+    /// win for the same number). `None` when the machine names no tools.
+    pub fn tool_table(&self) -> Result<Option<ToolTable>, String> {
+        let mut table = match &self.tool_table {
+            None => None,
+            Some(file) => {
+                let path = match &self.base_dir {
+                    Some(dir) => dir.join(file),
+                    None => file.clone(),
+                };
+                Some(ToolTable::load(&path).map_err(|e| format!("{}: {e}", path.display()))?)
+            }
+        };
+        if let Some(tools) = &self.tools {
+            let t = table.get_or_insert_with(ToolTable::new);
+            for tool in tools {
+                t.insert(Tool {
+                    number: tool.number,
+                    name: tool.name.clone().unwrap_or_default(),
+                    length: tool.length,
+                    radius: tool.radius,
+                    r2: 0.0,
+                    dl: 0.0,
+                    dr: 0.0,
+                    dr2: 0.0,
+                });
+            }
+        }
+        Ok(table)
+    }
+
+    /// Opens a program for this machine: the interpreter with the machine's tool table.
+    pub fn open_program(&self, program: &Path, start: Pose) -> Result<Interpreter, Diagnostic> {
+        let interp = Interpreter::open(program, start)?;
+        Ok(match self.tool_table() {
+            Ok(Some(table)) => interp.with_tools(table),
+            // A bad table file was refused when the machine file was loaded.
+            _ => interp,
+        })
     }
 
     /// The kinematics this machine names, over its axes in machine order.

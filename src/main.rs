@@ -3,7 +3,7 @@
 use clap::{Parser, Subcommand};
 use klar::config::MachineConfig;
 use klar::runtime::{RunError, RunOptions};
-use klar_interp::{Diagnostic, Interpreter, Pose};
+use klar_interp::{Diagnostic, Pose};
 use klar_motion::comp::Compensator;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
@@ -221,7 +221,7 @@ fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCod
         return ExitCode::FAILURE;
     }
     let start = start_pose(&config);
-    let interp = match Interpreter::open(program, start) {
+    let interp = match config.open_program(program, start) {
         Ok(i) => i,
         Err(d) => {
             print_diagnostics(&[d]);

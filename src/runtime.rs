@@ -31,7 +31,7 @@ use crate::testrun::{
 };
 use crate::trace::TraceWriter;
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
-use klar_interp::{AxisLetter, Diagnostic, Interpreter, Op, OpKind, SourceLoc};
+use klar_interp::{AxisLetter, Diagnostic, Op, OpKind, SourceLoc};
 use klar_motion::kinematics::Kinematics;
 use klar_motion::{
     AxisFault, BackendError, MotionError, Planner, PlannerConfig, Sample, Setpoint, Step,
@@ -534,7 +534,7 @@ impl<'a, 'w> Run<'a, 'w> {
         }
         let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
         let interp =
-            Interpreter::open(path, start).map_err(|d| fail(RunError::Program(d), &report))?;
+            config.open_program(path, start).map_err(|d| fail(RunError::Program(d), &report))?;
         let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
         let ops = OpStream::new(interp, start, max_rpm, path);
         let planner_config = PlannerConfig {

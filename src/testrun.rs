@@ -16,7 +16,7 @@ use crate::config::{BackendConfig, MachineConfig};
 use klar_interp::op::{SpindleDir, SpindleSpeed};
 use crate::runtime::RunError;
 use crate::runtime::stream::OpStream;
-use klar_interp::{AxisLetter, Diagnostic, Feed, Interpreter, Op, OpKind, Pose, SourceLoc};
+use klar_interp::{AxisLetter, Diagnostic, Feed, Op, OpKind, Pose, SourceLoc};
 use klar_motion::{Planner, PlannerConfig, Step};
 use std::path::Path;
 
@@ -85,7 +85,7 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
         ..TestRunReport::default()
     };
     let first_error_line = report.errors.first().map(|d| d.line);
-    let Ok(interp) = Interpreter::open(path, start) else {
+    let Ok(interp) = config.open_program(path, start) else {
         // `check` has already reported why the file cannot be opened.
         return report;
     };
