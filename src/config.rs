@@ -331,10 +331,12 @@ impl MachineConfig {
         let mut config = Self::parse(&shown, &text)?;
         config.base_dir = path.parent().map(Path::to_path_buf);
         // Read the tool table now, so that a bad file is refused with the machine file.
-        config.tool_table().map_err(|message| ConfigError::Invalid {
-            path: shown,
-            message,
-        })?;
+        config
+            .tool_table()
+            .map_err(|message| ConfigError::Invalid {
+                path: shown,
+                message,
+            })?;
         Ok(config)
     }
 

@@ -20,8 +20,8 @@
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
-pub(crate) mod stream;
 mod stop;
+pub(crate) mod stream;
 
 use crate::config::MachineConfig;
 use crate::machine::{MachineError, MachineIo};
@@ -533,8 +533,9 @@ impl<'a, 'w> Run<'a, 'w> {
             })?;
         }
         let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
-        let interp =
-            config.open_program(path, start).map_err(|d| fail(RunError::Program(d), &report))?;
+        let interp = config
+            .open_program(path, start)
+            .map_err(|d| fail(RunError::Program(d), &report))?;
         let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
         let ops = OpStream::new(interp, start, max_rpm, path);
         let planner_config = PlannerConfig {

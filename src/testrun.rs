@@ -13,9 +13,9 @@
 
 use crate::bounds::op_bounds;
 use crate::config::{BackendConfig, MachineConfig};
-use klar_interp::op::{SpindleDir, SpindleSpeed};
 use crate::runtime::RunError;
 use crate::runtime::stream::OpStream;
+use klar_interp::op::{SpindleDir, SpindleSpeed};
 use klar_interp::{AxisLetter, Diagnostic, Feed, Op, OpKind, Pose, SourceLoc};
 use klar_motion::{Planner, PlannerConfig, Step};
 use std::path::Path;

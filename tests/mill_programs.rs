@@ -36,6 +36,16 @@ fn rectangle_follows_the_programmed_contour() {
     // Every programmed end point is passed: at tangent joins the path runs through it, at
     // a blended corner within the tolerance. Samples are spaced by at most F·T (F600 = 10 mm/s),
     // so the nearest one lies within F·T/2 of the path's closest point.
+    let corners = [
+        [0.0, 10.0],
+        [0.0, 50.0],
+        [10.0, 60.0],
+        [80.0, 60.0],
+        [100.0, 40.0],
+        [100.0, 10.0],
+        [90.0, 0.0],
+        [10.0, 0.0],
+    ];
     let reach = machine.tolerance + 10.0 * dt / 2.0 + 1e-9;
     for c in corners {
         let nearest = (0..x.len())
@@ -128,4 +138,39 @@ fn the_same_program_gives_the_same_trace_bit_for_bit() {
     let (_, a) = run(&program("rectangle.h"), &machine);
     let (_, b) = run(&program("rectangle.h"), &machine);
     assert_eq!(a, b);
+}
+
+/// The tool radius comes from the machine's tool table: programs/rectangle_rl.h with `DR+5`
+/// replaced by a table entry R5 runs the same tool-centre path, 5 mm outside the contour.
+#[test]
+fn the_tool_table_gives_the_radius_for_compensation() {
+    let text = std::fs::read_to_string(program("rectangle_rl.h"))
+        .unwrap()
+        .replace("TOOL CALL 1 Z S3000 DR+5", "TOOL CALL 1 Z S3000");
+    let path = common::temp_program("rectangle_table.h", &text);
+    let toml = format!(
+        "{}\n[[tool]]\nnumber = 1\nname = \"end mill 10\"\nlength = 60.0\nradius = 5.0\n",
+        klar::config::BUILTIN_MILL
+    );
+    let machine = MachineConfig::parse("table.toml", &toml).unwrap();
+    let (result, trace) = run(&path, &machine);
+    result.unwrap_or_else(|f| panic!("{}", f.error));
+    let (x, y, z) = (
+        trace.column("X").unwrap(),
+        trace.column("Y").unwrap(),
+        trace.column("Z").unwrap(),
+    );
+    let mut n = 0;
+    for i in 0..x.len() {
+        // On the contour pass: at depth, and past the approach/leave moves at X < -5.
+        if z[i] == -5.0 && x[i] > -4.0 {
+            n += 1;
+            let d = distance_to_rectangle([x[i], y[i]]);
+            assert!(
+                (d - 5.0).abs() <= machine.tolerance + 1e-6,
+                "row {i}: {d} mm"
+            );
+        }
+    }
+    assert!(n > 1000, "{n} samples on the contour pass");
 }

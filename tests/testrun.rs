@@ -97,7 +97,12 @@ fn a_tool_missing_from_the_table_is_an_error() {
     machine.tools = Some(
         [1, 2]
             .into_iter()
-            .map(|number| ToolConfig { number, name: None })
+            .map(|number| ToolConfig {
+                number,
+                name: None,
+                length: 50.0,
+                radius: 3.0,
+            })
             .collect(),
     );
     let report = test_run(&path, &machine);
@@ -108,6 +113,8 @@ fn a_tool_missing_from_the_table_is_an_error() {
     machine.tools.as_mut().unwrap().push(ToolConfig {
         number: 7,
         name: Some("drill".into()),
+        length: 80.0,
+        radius: 2.5,
     });
     assert!(test_run(&path, &machine).passed());
 }

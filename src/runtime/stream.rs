@@ -42,7 +42,12 @@ pub(crate) struct OpStream {
 impl OpStream {
     /// A stream over `interp`, compensating from `start`; `max_rpm` limits surface-speed
     /// conversions.
-    pub(crate) fn new(interp: Interpreter, start: Pose, max_rpm: f64, path: &std::path::Path) -> Self {
+    pub(crate) fn new(
+        interp: Interpreter,
+        start: Pose,
+        max_rpm: f64,
+        path: &std::path::Path,
+    ) -> Self {
         Self {
             interp,
             comp: Compensator::new(start),
@@ -118,7 +123,10 @@ impl OpStream {
                 block: op.loc.block,
                 message: format!(
                     "{}feed per revolution needs a turning spindle",
-                    op.loc.block.map(|n| format!("block {n}: ")).unwrap_or_default()
+                    op.loc
+                        .block
+                        .map(|n| format!("block {n}: "))
+                        .unwrap_or_default()
                 ),
             }));
         }
@@ -201,7 +209,7 @@ mod tests {
     fn constant_surface_speed_follows_the_radius_and_the_limit() {
         // 200 m/min at r = 20 mm: 200000 / (2π·20) = 1591.55 rpm.
         let rpm = OpStream::surface_speed_rpm(200.0, 20.0, 4000.0);
-        assert!((rpm - 1591.549_430_918_953).abs() < 1e-9);
+        assert!((rpm - 1_591.549_430_918_953).abs() < 1e-9);
         assert_eq!(OpStream::surface_speed_rpm(200.0, 2.0, 4000.0), 4000.0);
         assert_eq!(OpStream::surface_speed_rpm(200.0, 0.0, 4000.0), 4000.0);
     }
