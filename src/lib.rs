@@ -2,8 +2,10 @@
 //!
 //! This root crate holds the machine configuration ([`config`]), the machine's backends
 //! ([`machine`]), the runtime that wires interpreter → planner → kinematics → backends
-//! ([`runtime`]), the trace CSV ([`trace`]),
-//! toolpath plots ([`plot`]) and the lab-bench web dashboard ([`serve`]). The command-line front end lives in `main.rs`.
+//! ([`runtime`]), the trace CSV ([`trace`]), toolpath plots ([`plot`]) and the lab-bench web
+//! dashboard ([`serve`]). The command-line front end lives in `main.rs`.
+
+#![warn(missing_docs)]
 
 pub mod bounds;
 pub mod config;

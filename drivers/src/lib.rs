@@ -6,6 +6,8 @@
 //! - [`modbus`]: Modbus RTU servo drives and spindle VFDs.
 //! - [`stepdir`]: step/direction outputs and switch inputs over embedded-hal.
 
+#![warn(missing_docs)]
+
 pub mod can;
 pub mod canopen;
 pub mod cia402;

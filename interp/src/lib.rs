@@ -5,6 +5,8 @@
 //! block, executes it against its modal state and emits the resulting ops, each with the
 //! source location of its block, so memory use does not grow with the program.
 
+#![warn(missing_docs)]
+
 pub mod diag;
 pub mod dialect;
 pub mod din;

@@ -9,6 +9,8 @@
 //! - [`modbus`]: simulated Modbus RTU devices (servo drive, spindle VFD).
 //! - [`stepper`]: a simulated stepper motor and switches behind step/dir pins.
 
+#![warn(missing_docs)]
+
 pub mod axis;
 pub mod cia402;
 pub mod faults;
