@@ -10,6 +10,14 @@ use klar_motion::{AxisLimits, MotionError, Planner, PlannerConfig, Step};
 
 const PERIOD: f64 = 0.001;
 
+/// Time of the first sample standing exactly on `end`.
+fn arrival_time(r: &Run, end: &Pose) -> f64 {
+    r.samples
+        .iter()
+        .find(|s| s.pose == *end)
+        .map_or(f64::INFINITY, |s| s.t)
+}
+
 #[test]
 fn long_line_takes_the_closed_form_time_and_ends_exactly() {
     // Direction (0.6, 0.8, 0): path limits are the axis limits over the largest component.
@@ -26,15 +34,11 @@ fn long_line_takes_the_closed_form_time_and_ends_exactly() {
     let j = (jmax / 0.6).min(jmax / 0.8);
     assert!(v * j >= a * a, "test case must reach full acceleration");
     let t = d / v + v / a + a / j;
-    assert!(
-        (r.planned_time - t).abs() < 1e-9,
-        "{} vs {t}",
-        r.planned_time
-    );
-
-    // One sample per period up to the first instant at or after the end.
-    let n = (t / PERIOD).ceil() as usize;
-    assert_eq!(r.samples.len(), n);
+    // The look-ahead rides the braking curve sample by sample: it arrives within one period
+    // of the time-optimal closed form, and stops sampling there.
+    let arrival = arrival_time(&r, &to);
+    assert!((arrival - t).abs() <= PERIOD, "{arrival} vs {t}");
+    assert_eq!(r.samples.last().unwrap().t, arrival);
     for (k, s) in r.samples.iter().enumerate() {
         assert_eq!(s.t, (k + 1) as f64 * PERIOD);
     }
@@ -42,7 +46,7 @@ fn long_line_takes_the_closed_form_time_and_ends_exactly() {
     for i in 0..9 {
         assert!((last.pose.0[i] - to.0[i]).abs() <= 1e-9);
     }
-    let before = &r.samples[n - 2];
+    let before = &r.samples[r.samples.len() - 2];
     assert!(linear_distance(&before.pose, &to) > 0.0);
     assert_within_limits(&cfg, &from, &r.samples, 1.01);
     // Cruise at the feed is reached, never exceeded.
@@ -89,7 +93,8 @@ fn rotary_move_is_timed_in_degrees() {
     let r = run(cfg.clone(), from, vec![line(1, from, to, Feed::Rate(feed))]);
     assert!(feed * j >= a * a, "test case must reach full acceleration");
     let t = 720.0 / feed + feed / a + a / j;
-    assert!((r.planned_time - t).abs() < 1e-9);
+    let arrival = arrival_time(&r, &to);
+    assert!((arrival - t).abs() <= PERIOD, "{arrival} vs {t}");
     assert_eq!(r.samples.last().unwrap().pose.get(AxisLetter::C), 720.0);
     assert_within_limits(&cfg, &from, &r.samples, 1.01);
 }
@@ -170,9 +175,11 @@ fn mixed_program_keeps_every_axis_within_its_limits() {
                 "line {}: speed {v} above {f}",
                 s.loc.line
             );
+            // A period that crosses into a slower piece may average a hair above its
+            // feed (the speed meets the limit at the crossing, not at the samples).
             let fd = linear_distance(&prev, &s.pose) / PERIOD;
             assert!(
-                fd <= f * (1.0 + 1e-9),
+                fd <= f * (1.0 + 1e-4),
                 "line {}: chord speed {fd}",
                 s.loc.line
             );
@@ -264,22 +271,19 @@ fn events_arrive_in_order_when_they_take_effect() {
     let lines: Vec<u32> = r.events.iter().map(|e| e.1.loc.line).collect();
     assert_eq!(lines, vec![1, 3, 4, 6]);
     assert_eq!(r.events[0].0, 0, "coolant on before any motion");
-    // Line 2 ends at its closed-form time t1, between two samples. Coolant off comes after
-    // every sample up to t1 and before the first one past it.
+    // Line 2 ends in a standstill at b (the program stop needs it) near its closed-form
+    // time t1. Coolant off comes on the way there, the stop once the machine stands on b.
     let t1 = 100.37 / feed + feed / amax + amax / jmax;
-    let off_grid = (t1 / PERIOD).fract();
-    assert!(
-        off_grid > 0.01 && off_grid < 0.99,
-        "test case must end between samples"
-    );
-    let at = r.events[1].0;
-    assert!(r.samples[at - 1].t <= t1 + 1e-12);
-    assert!(r.samples[at].t > t1);
-    // The program stop waits for the next sample instant, which stands exactly on b.
-    let at = r.events[2].0;
-    assert_eq!(r.samples[at - 1].pose, b);
-    assert_eq!(r.samples[at - 1].t, (t1 / PERIOD).ceil() * PERIOD);
-    assert_eq!(r.samples[at].loc.line, 5);
+    let arrival = arrival_time(&r, &b);
+    assert!((arrival - t1).abs() <= PERIOD, "{arrival} vs {t1}");
+    let off = r.events[1].0;
+    assert!(r.samples[off].t <= arrival + 1e-12);
+    let stop = r.events[2].0;
+    assert_eq!(r.samples[stop - 1].pose, b);
+    assert!(r.samples[stop - 1].t - arrival <= PERIOD + 1e-12);
+    assert_eq!(r.samples[stop - 1].velocity, [0.0; 9]);
+    assert!(off <= stop);
+    assert_eq!(r.samples[stop].loc.line, 5);
     // End comes after the last sample, which is on the end point.
     assert_eq!(r.events[3].0, r.samples.len());
     assert_eq!(r.samples.last().unwrap().pose, c);
@@ -304,7 +308,6 @@ fn zero_length_moves_take_no_time() {
         ],
     );
     assert_eq!(plain.samples.len(), with_zero.samples.len());
-    assert_eq!(plain.planned_time, with_zero.planned_time);
     assert!(with_zero.samples.iter().all(|s| s.loc.line == 1));
 }
 
@@ -328,6 +331,70 @@ fn short_segments_still_end_exactly() {
     for i in 0..3 {
         assert!((last.0[i] - p.0[i]).abs() <= 1e-9);
     }
+}
+
+#[test]
+fn a_program_ending_on_a_short_move_ends_exactly_on_its_end_point() {
+    // A 2 ms period, a long line, then a short move at an odd angle whose end the path
+    // distance reaches only through sums that round.
+    let cfg = PlannerConfig {
+        period: 0.002,
+        ..config(limits_xyz(100.0, 1000.0, 20_000.0))
+    };
+    let a = Pose::xyz(0.1, 0.2, 0.3);
+    let b = Pose::xyz(37.123456789, -11.987654321, 5.5);
+    let c = Pose::xyz(37.123456789 + 0.0137, -11.987654321 + 0.0071, 5.5 - 0.0029);
+    let r = run(
+        cfg.clone(),
+        a,
+        vec![
+            line(1, a, b, Feed::Rate(80.0)),
+            line(2, b, c, Feed::Rate(80.0)),
+        ],
+    );
+    assert_within_limits(&cfg, &a, &r.samples, 1.01);
+    let last = r.samples.last().unwrap();
+    assert_eq!(last.pose, c);
+    assert_eq!(last.velocity, [0.0; 9]);
+    assert_eq!(last.acceleration, [0.0; 9]);
+    // Sample times are whole periods.
+    for (k, s) in r.samples.iter().enumerate() {
+        assert_eq!(s.t, (k + 1) as f64 * 0.002);
+    }
+}
+
+#[test]
+fn stops_before_events_land_exactly_on_the_point() {
+    let cfg = PlannerConfig {
+        period: 0.002,
+        ..config(limits_xyz(100.0, 1000.0, 20_000.0))
+    };
+    let a = Pose::xyz(0.3, 0.0, 0.0);
+    let b = Pose::xyz(13.777, 2.313, -0.41);
+    let c = Pose::xyz(13.7801, 2.3177, -0.4105);
+    let d = Pose::xyz(1.0, 1.0, 1.0);
+    let r = run(
+        cfg.clone(),
+        a,
+        vec![
+            line(1, a, b, Feed::Rate(60.0)),
+            op(2, OpKind::ExactStop),
+            line(3, b, c, Feed::Rate(60.0)),
+            op(4, OpKind::Dwell { seconds: 0.01 }),
+            line(5, c, d, Feed::Rapid),
+            op(6, OpKind::End),
+        ],
+    );
+    assert_within_limits(&cfg, &a, &r.samples, 1.01);
+    let points = [b, c, d];
+    assert_eq!(r.events.len(), 3);
+    for ((at, _), point) in r.events.iter().zip(points) {
+        // The last sample before each event stands exactly on its point, at rest.
+        let before = &r.samples[at - 1];
+        assert_eq!(before.pose, point);
+        assert_eq!(before.velocity, [0.0; 9]);
+    }
+    assert_eq!(r.samples.last().unwrap().pose, d);
 }
 
 fn planner() -> Planner {
@@ -412,7 +479,9 @@ fn bad_ops_are_refused_with_their_location() {
 }
 
 #[test]
-fn the_buffer_is_bounded() {
+fn the_look_ahead_is_sized_by_braking_distance_and_bounded_in_memory() {
+    // 1 mm segments: the planner asks for input until the committed path reaches past its
+    // look-ahead distance (three elements wait for their corners).
     let mut p = planner();
     let mut n = 0u32;
     let mut from = Pose::ZERO;
@@ -422,7 +491,31 @@ fn the_buffer_is_bounded() {
         p.push(line(n, from, to, Feed::Rate(10.0))).unwrap();
         from = to;
     }
-    assert!((1..=64).contains(&n), "{n}");
+    let horizon = p.horizon();
+    // The horizon is twice the braking distance from the top speed (√3 · 100 · 1.5 mm/s
+    // over three axes) with half the axis acceleration and jerk, so far beyond 10 mm.
+    let top = 3f64.sqrt() * 100.0 * 1.5;
+    assert!(horizon >= top * top / 1000.0, "{horizon}");
+    assert!(
+        f64::from(n) >= horizon && f64::from(n) <= horizon + 4.0,
+        "{n} vs {horizon}"
+    );
+
+    // Tiny segments hit the memory bound first, and a push beyond it is refused.
+    let mut p = planner();
+    let mut n = 0u32;
+    let mut from = Pose::ZERO;
+    while p.needs_input() {
+        n += 1;
+        let to = Pose::xyz(f64::from(n) * 1e-4, 0.0, 0.0);
+        p.push(line(n, from, to, Feed::Rate(10.0))).unwrap();
+        from = to;
+    }
+    assert!(f64::from(n) * 1e-4 < horizon);
+    assert!(
+        n as usize <= klar_motion::planner::BUFFER_CAPACITY + 3,
+        "{n}"
+    );
     let e = p
         .push(line(
             n + 1,
@@ -491,39 +584,54 @@ fn a_move_too_long_to_measure_is_refused() {
 }
 
 #[test]
-fn the_next_segment_starts_within_the_cycle_where_the_previous_one_ends() {
-    let (vmax, amax, jmax) = (100.0, 1000.0, 20_000.0);
-    let cfg = config(limits_xyz(vmax, amax, jmax));
+fn an_exact_stop_op_stops_at_the_corner_and_its_absence_blends_it() {
+    let cfg = config(limits_xyz(100.0, 1000.0, 20_000.0));
     let a = Pose::ZERO;
-    let b = Pose::xyz(100.37, 0.0, 0.0);
-    let c = Pose::xyz(100.37, 40.0, 0.0);
-    let feed = 50.0;
-    let r = run(
-        cfg,
-        a,
-        vec![
-            line(1, a, b, Feed::Rate(feed)),
-            line(2, b, c, Feed::Rate(feed)),
-        ],
+    // A 10° turn in the XZ plane.
+    let b = Pose::xyz(40.0, 0.0, 0.0);
+    let c = Pose::xyz(
+        40.0 + 20.0 * 10f64.to_radians().cos(),
+        0.0,
+        -20.0 * 10f64.to_radians().sin(),
     );
-    // Line 1 ends at t1 (closed form); line 2 starts there with jerk J from rest, so
-    // τ seconds later it has moved J·τ³/6 along Y (while τ < A/J).
-    let t1 = 100.37 / feed + feed / amax + amax / jmax;
-    let first = r.samples.iter().position(|s| s.loc.line == 2).unwrap();
-    let s = &r.samples[first];
-    let tau = s.t - t1;
-    assert!(tau > 0.0 && tau <= PERIOD && tau < amax / jmax, "tau {tau}");
-    assert_eq!(s.pose.0[0], 100.37);
-    let expect = jmax * tau.powi(3) / 6.0;
+    let ops = |stop: bool| {
+        let mut v = vec![line(1, a, b, Feed::Rate(50.0))];
+        if stop {
+            v.push(op(2, OpKind::ExactStop));
+        }
+        v.push(line(3, b, c, Feed::Rate(50.0)));
+        v
+    };
+    let stopped = run(cfg.clone(), a, ops(true));
+    // With the exact stop some sample stands exactly on the corner with zero speed.
     assert!(
-        (s.pose.0[1] - expect).abs() < 1e-12,
-        "{} vs {expect}",
-        s.pose.0[1]
+        stopped
+            .samples
+            .iter()
+            .any(|s| s.pose == b && s.velocity == [0.0; 9])
     );
-    assert!((s.velocity[1] - jmax * tau * tau / 2.0).abs() < 1e-9);
-    assert!((s.acceleration[1] - jmax * tau).abs() < 1e-9);
-    // The sample before it is still on line 1, short of b by the braking tail J·(t1−t)³/6.
-    let prev = &r.samples[first - 1];
-    let rest = t1 - prev.t;
-    assert!((b.0[0] - prev.pose.0[0] - jmax * rest.powi(3) / 6.0).abs() < 1e-9);
+    assert!(matches!(stopped.events[0].1.kind, OpKind::ExactStop));
+    assert_eq!(stopped.samples[stopped.events[0].0 - 1].pose, b);
+    assert_within_limits(&cfg, &a, &stopped.samples, 1.01);
+
+    let blended = run(cfg.clone(), a, ops(false));
+    // Without it the corner is rounded inside the tolerance and never reached; the path
+    // keeps moving (no sample at rest until the end).
+    let moving = &blended.samples[..blended.samples.len() - 1];
+    assert!(moving.iter().all(|s| s.pose != b));
+    assert!(moving.iter().all(|s| s.velocity.iter().any(|v| *v != 0.0)));
+    let (ux, uz) = (10f64.to_radians().cos(), -10f64.to_radians().sin());
+    for s in &blended.samples {
+        // Distance from the two programmed lines (in the XZ plane).
+        let (x, z) = (s.pose.0[0], s.pose.0[2]);
+        let d1 = if x <= 40.0 {
+            z.abs()
+        } else {
+            (x - 40.0).hypot(z)
+        };
+        let along = ((x - 40.0) * ux + z * uz).clamp(0.0, 20.0);
+        let d2 = (x - 40.0 - along * ux).hypot(z - along * uz);
+        assert!(d1.min(d2) <= cfg.tolerance, "{x} {z}");
+    }
+    assert_within_limits(&cfg, &a, &blended.samples, 1.01);
 }

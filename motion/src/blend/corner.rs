@@ -48,10 +48,11 @@ pub fn blend_within(
             .iter()
             .map(|part| distance_to_part(&p, part))
             .fold(f64::INFINITY, f64::min);
-        worst = worst.max(d);
-        if !(worst <= limit) {
+        // NaN distances count as too far.
+        if d.is_nan() || d > limit {
             return None;
         }
+        worst = worst.max(d);
     }
     Some((curve, worst))
 }

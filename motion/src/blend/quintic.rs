@@ -70,10 +70,7 @@ impl Quintic {
         for (i, ci) in c.iter_mut().enumerate() {
             let d = chord[i];
             let (v0, v1) = (lambda * start.d1[i], lambda * end.d1[i]);
-            let (w0, w1) = (
-                lambda * lambda * start.d2[i],
-                lambda * lambda * end.d2[i],
-            );
+            let (w0, w1) = (lambda * lambda * start.d2[i], lambda * lambda * end.d2[i]);
             *ci = [
                 start.pose.0[i],
                 v0,
@@ -136,8 +133,7 @@ impl Quintic {
         let mut sum = 0.0;
         for &i in Metric::Linear.axes() {
             let c = &self.c[i];
-            let d1 =
-                c[1] + u * (2.0 * c[2] + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5])));
+            let d1 = c[1] + u * (2.0 * c[2] + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5])));
             sum += d1 * d1;
         }
         sum.sqrt()
@@ -177,7 +173,11 @@ impl Quintic {
         if s >= len {
             return 1.0;
         }
-        let k = self.table.partition_point(|&x| x <= s).clamp(1, TABLE_INTERVALS) - 1;
+        let k = self
+            .table
+            .partition_point(|&x| x <= s)
+            .clamp(1, TABLE_INTERVALS)
+            - 1;
         let (lo, hi) = (self.table[k], self.table[k + 1]);
         let h = 1.0 / TABLE_INTERVALS as f64;
         let u0 = k as f64 * h;

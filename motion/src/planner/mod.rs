@@ -76,11 +76,7 @@ enum Marker {
     /// An op that takes effect when the path gets there.
     Event { at: f64, op: Op },
     /// A standstill at `at`, then the op (if any), then a hold of `dwell` seconds.
-    Stop {
-        at: f64,
-        op: Option<Op>,
-        dwell: f64,
-    },
+    Stop { at: f64, op: Option<Op>, dwell: f64 },
 }
 
 /// An element waiting for its corners, with the events that follow it.
@@ -123,6 +119,8 @@ pub struct Planner {
     stash: Option<Sample>,
     hold_until: Option<(f64, SourceLoc)>,
     window: Window,
+    /// Distance ahead the last scan looked at.
+    range: f64,
     factor: f64,
     held: bool,
     cycles: u64,
@@ -170,6 +168,7 @@ impl Planner {
             stash: None,
             hold_until: None,
             window: Window::default(),
+            range: 0.0,
             factor: 1.0,
             held: false,
             cycles: 0,
@@ -187,7 +186,7 @@ impl Planner {
     pub fn needs_input(&self) -> bool {
         !self.finished
             && self.pieces.len() + self.markers.len() + self.waiting.len() < BUFFER_CAPACITY
-            && self.committed_end - self.state.s < self.horizon
+            && self.committed_end - self.state.s < self.horizon.max(self.range)
     }
 
     /// Time of the last sample given out, in seconds. (The look-ahead planner decides the
@@ -407,7 +406,7 @@ impl Planner {
             let next = rest.next().map(|w| &mut w.element);
             let after = rest.next().map(|w| &w.element);
             let after = if flushing { None } else { after };
-            commit(&mut front.element, next, after)
+            commit(&mut front.element, next, after, &self.config.limits)
         };
         if done.stop_first {
             self.add_stop(self.committed_end);
@@ -417,6 +416,13 @@ impl Planner {
             let is_element = matches!(shape, Shape::Element(_));
             let l = piece_limits(&shape, length, feed, &self.config.limits)
                 .map_err(|e| piece_error(e, loc))?;
+            // A period that crosses from one piece into the next uses one jerk: give both
+            // the lower of their jerk limits.
+            let mut jerk = l.jerk;
+            if let Some(prev) = self.pieces.back_mut() {
+                prev.jerk = prev.jerk.min(jerk);
+                jerk = jerk.min(prev.jerk);
+            }
             self.pieces.push_back(Piece {
                 shape,
                 offset,
@@ -425,7 +431,7 @@ impl Planner {
                 vmax: l.velocity,
                 feed,
                 accel: l.acceleration,
-                jerk: l.jerk,
+                jerk,
                 loc,
             });
             self.committed_end += length;
@@ -464,7 +470,7 @@ impl Planner {
     }
 
     fn at_rest(&self) -> bool {
-        self.state.v <= 1e-9 && self.state.a.abs() <= 1e-6
+        self.state.v <= 1e-9 && self.state.a.abs() <= 1e-3
     }
 
     /// The next sample or event; `None` once finished and drained (or, before
@@ -472,7 +478,7 @@ impl Planner {
     pub fn next_step(&mut self) -> Option<Step> {
         loop {
             match self.markers.front() {
-                Some(Marker::Event { at, .. }) if *at <= self.reached + 1e-9 => {
+                Some(Marker::Event { at, .. }) if *at <= self.reached + STOP_SNAP => {
                     if let Some(Marker::Event { op, .. }) = self.markers.pop_front() {
                         return Some(Step::Event(op));
                     }
@@ -532,7 +538,7 @@ impl Planner {
             }
             let sample = self.advance(t);
             self.cycles += 1;
-            if matches!(self.markers.front(), Some(Marker::Event { at, .. }) if *at <= self.reached + 1e-9)
+            if matches!(self.markers.front(), Some(Marker::Event { at, .. }) if *at <= self.reached + STOP_SNAP)
             {
                 self.stash = Some(sample);
                 continue;
@@ -552,7 +558,7 @@ impl Planner {
     /// Moves the path state on by one period and samples it at time `t`.
     fn advance(&mut self, t: f64) -> Sample {
         self.scan();
-        let target = match (self.held, self.pieces.front()) {
+        let target = match (self.held, self.pieces.get(self.current_index())) {
             (false, Some(p)) => p.speed_limit(self.factor),
             _ => 0.0,
         };
@@ -560,7 +566,9 @@ impl Planner {
         // Never past the end of the committed path or the next stop.
         let stop = self.next_stop();
         if next.s > stop {
-            tracing::warn!(over = next.s - stop, "path state clamped at a stop point");
+            if next.s - stop > STOP_SNAP {
+                tracing::warn!(over = next.s - stop, "path state clamped at a stop point");
+            }
             next = Motion {
                 s: stop,
                 v: 0.0,
@@ -569,6 +577,14 @@ impl Planner {
         }
         if next.v < 0.0 {
             next.v = 0.0;
+        }
+        // A standstill within rounding of the stop point is on it.
+        if next.v <= 1e-9 && next.a.abs() <= 1e-3 && stop - next.s <= STOP_SNAP {
+            next = Motion {
+                s: stop,
+                v: 0.0,
+                a: 0.0,
+            };
         }
         self.state = next;
         self.reached = next.s;
@@ -605,6 +621,16 @@ impl Planner {
         }
     }
 
+    /// Index of the piece the path state moves on: the first that ends beyond it (a state
+    /// exactly at a piece's end moves on the next one).
+    fn current_index(&self) -> usize {
+        let s = self.state.s;
+        self.pieces
+            .iter()
+            .position(|p| p.end() > s)
+            .unwrap_or(self.pieces.len().saturating_sub(1))
+    }
+
     /// The next point where the path must stand still.
     fn next_stop(&self) -> f64 {
         self.markers
@@ -621,46 +647,80 @@ impl Planner {
     fn scan(&mut self) {
         let s = self.state.s;
         let stop = self.next_stop();
-        let current = match self.pieces.front() {
+        let first = self.current_index();
+        let current = match self.pieces.get(first) {
             Some(p) => p.speed_limit(self.factor),
             None => 0.0,
         };
         let vh = self.state.v.max(current);
-        let range = 2.0
-            * Ramp::new(vh, self.state.a.max(0.0), 0.0, self.accel_floor, self.jerk_floor)
-                .distance()
-            + 2.0 * vh * self.config.period
-            + 1e-9;
+        let (v0, a0, period) = (vh, self.state.a.max(0.0), self.config.period);
+        // Braking distance with the lowest limits seen so far, doubled.
+        let reach_for = |accel: f64, jerk: f64| {
+            2.0 * Ramp::new(v0, a0, 0.0, accel, jerk).distance() + 2.0 * v0 * period + 1e-9
+        };
+        let mut range = reach_for(self.accel_floor, self.jerk_floor);
         let w = &mut self.window;
         w.limits.clear();
+        // Acceleration and jerk for the next period: those of the current piece (the
+        // limits ahead make the state arrive at each piece within its acceleration limit;
+        // neighbouring pieces share the lower jerk limit, see `commit_front`).
         w.accel = f64::INFINITY;
         w.jerk = f64::INFINITY;
-        let mut lowest = f64::INFINITY;
-        for p in &self.pieces {
+        let (mut pre_accel, mut pre_jerk) = (f64::INFINITY, f64::INFINITY);
+        let (mut low_speed, mut low_accel) = (f64::INFINITY, f64::INFINITY);
+        for (k, p) in self.pieces.iter().skip(first).enumerate() {
             if p.start - s > range || p.start >= stop {
                 break;
             }
-            w.accel = w.accel.min(p.accel);
-            w.jerk = w.jerk.min(p.jerk);
+            if k == 0 {
+                w.accel = p.accel;
+                w.jerk = p.jerk;
+            }
+            if k == 0 {
+                pre_accel = p.accel;
+                pre_jerk = p.jerk;
+                range = range.max(reach_for(pre_accel, pre_jerk));
+            }
             let limit = p.speed_limit(self.factor);
-            if limit < lowest {
-                lowest = limit;
+            if limit < low_speed || p.accel < low_accel {
+                low_speed = low_speed.min(limit);
+                low_accel = low_accel.min(p.accel);
                 w.limits.push(Limit {
                     at: p.start,
                     speed: limit,
+                    accel_after: p.accel,
+                    accel: pre_accel,
+                    jerk: pre_jerk,
                 });
+                // Limits further on are checked from this one (see `speed::settle`).
+                pre_accel = p.accel;
+                pre_jerk = p.jerk;
             }
+            if p.accel < pre_accel || p.jerk < pre_jerk {
+                pre_accel = pre_accel.min(p.accel);
+                pre_jerk = pre_jerk.min(p.jerk);
+                range = range.max(reach_for(pre_accel, pre_jerk));
+            }
+        }
+        self.range = range;
+        if !w.accel.is_finite() {
+            w.accel = self.accel_floor;
+            w.jerk = self.jerk_floor;
+        }
+        if !pre_accel.is_finite() {
+            pre_accel = w.accel;
+            pre_jerk = w.jerk;
         }
         if stop - s <= range {
             w.limits.push(Limit {
                 at: stop,
                 speed: 0.0,
+                accel_after: f64::INFINITY,
+                accel: pre_accel,
+                jerk: pre_jerk,
             });
         }
-        if !w.accel.is_finite() {
-            w.accel = self.accel_floor;
-            w.jerk = self.jerk_floor;
-        }
+        speed::settle(&mut w.limits);
     }
 
     /// Refuses an op that does not start at the previous end point.

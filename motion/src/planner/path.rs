@@ -7,7 +7,8 @@
 //!
 //! Corner rules, for two consecutive elements without a stop between them:
 //! * already curvature-continuous (same tangent, same curvature vector): no blend;
-//! * tolerance 0, rotary-only moves, or no blend found: exact stop at the corner;
+//! * tolerance 0, rotary-only moves, a turn sharper than 120°, or no blend found: exact
+//!   stop at the corner;
 //! * otherwise a [`Quintic`] blend whose distance from the programmed contour is checked
 //!   against the tolerance ([`blend_within`]); it is made as long as the tolerance allows,
 //!   at most half of each element.
@@ -31,6 +32,11 @@ pub const MAX_OVERRIDE: f64 = 1.5;
 /// Largest turning angle (radians) at either end of a line that may become a split point.
 const SPLIT_MAX_ANGLE: f64 = 0.3;
 
+/// Largest turning angle (radians) that is blended; sharper corners (beyond 120°, nearly
+/// reversing) stop exactly: a blend there would be slow anyway and its curvature peak too
+/// narrow for sampled bounds.
+const MAX_BLEND_ANGLE: f64 = 2.1;
+
 /// Tangent and curvature differences below which two elements already join smoothly.
 const SMOOTH_TANGENT: f64 = 1e-9;
 const SMOOTH_CURVATURE: f64 = 1e-7;
@@ -43,6 +49,7 @@ const MIN_BLEND: f64 = 1e-6;
 
 /// The geometry a piece follows.
 #[derive(Debug, Clone)]
+#[allow(clippy::large_enum_variant)] // moved into a queue once; boxing would cost a heap trip
 pub enum Shape {
     /// (Part of) a programmed element.
     Element(Segment),
@@ -57,7 +64,18 @@ impl Shape {
             Shape::Blend(q) => q.point(s),
         }
     }
+
+    fn length(&self) -> f64 {
+        match self {
+            Shape::Element(g) => g.length(),
+            Shape::Blend(q) => q.length(),
+        }
+    }
 }
+
+/// Relative length difference within which a piece counts as running to the end of its
+/// shape (`offset + length` may round below the shape's length).
+const END_ROUNDING: f64 = 1e-12;
 
 /// One piece of the blended path with constant limits.
 #[derive(Debug, Clone)]
@@ -98,6 +116,19 @@ impl Piece {
 
     /// Pose and derivatives at path distance `s` (global).
     pub fn point(&self, s: f64) -> PathPoint {
+        // At (or past) the end exactly the end: `start + length - start` may round, and so
+        // may `offset + length` against the shape's own length, whose end is the programmed
+        // end point.
+        if s >= self.end() {
+            let whole = self.shape.length();
+            let to = self.offset + self.length;
+            let at = if to >= whole * (1.0 - END_ROUNDING) {
+                whole
+            } else {
+                to
+            };
+            return self.shape.point(at);
+        }
         let local = (s - self.start).clamp(0.0, self.length);
         self.shape.point(self.offset + local)
     }
@@ -151,11 +182,12 @@ pub fn piece_limits(
         Shape::Element(g) => g.bounds(),
         Shape::Blend(q) => q.bounds(),
     };
-    let l = path_limits(&bounds, length, limits, feed.map(|f| f * MAX_OVERRIDE)).map_err(
-        |e| match e {
-            LimitError::AbsentAxis(a) => PieceError::Absent(a),
-        },
-    )?;
+    let l =
+        path_limits(&bounds, length, limits, feed.map(|f| f * MAX_OVERRIDE)).map_err(
+            |e| match e {
+                LimitError::AbsentAxis(a) => PieceError::Absent(a),
+            },
+        )?;
     let usable = |x: f64| x.is_finite() && x > 0.0;
     if usable(l.velocity) && usable(l.acceleration) && usable(l.jerk) {
         Ok(l)
@@ -182,7 +214,12 @@ fn diff_norm(a: &[f64; 9], b: &[f64; 9]) -> f64 {
 ///
 /// `next` is the following element (None: `cur` is the last before a stop); `after` the
 /// one after it (to decide whether `next` becomes a split point). Updates `next`'s trim.
-pub fn commit(cur: &mut Element, next: Option<&mut Element>, after: Option<&Element>) -> Committed {
+pub fn commit(
+    cur: &mut Element,
+    next: Option<&mut Element>,
+    after: Option<&Element>,
+    limits: &[Option<AxisLimits>; 9],
+) -> Committed {
     let mut out = Committed::default();
     let len = cur.segment.length();
     let Some(next) = next else {
@@ -204,14 +241,14 @@ pub fn commit(cur: &mut Element, next: Option<&mut Element>, after: Option<&Elem
         && cur.segment.metric() == Metric::Linear
         && next.segment.metric() == Metric::Linear;
     if blendable {
-        if let Some(done) = try_corner(cur, next, after, tol) {
+        if let Some(done) = try_corner(cur, next, after, tol, limits) {
             return done;
         }
         if cur.split.is_some() {
             // The blend before ends at a split point whose curvature no blend here can take
             // over: stop there, then treat the rest of the line as a plain element.
             cur.split = None;
-            if let Some(mut done) = try_corner(cur, next, None, tol) {
+            if let Some(mut done) = try_corner(cur, next, None, tol, limits) {
                 done.stop_first = true;
                 return done;
             }
@@ -237,6 +274,40 @@ fn push_part(out: &mut Committed, e: &Element, from: f64, to: f64) {
             e.loc,
         ));
     }
+}
+
+/// Share of its neighbours' speed or acceleration limit below which the blend of a sharp
+/// corner (turning more than [`SPLIT_MAX_ANGLE`]) is not worth it: the path stops exactly
+/// at the corner instead.
+const SLOW_BLEND: f64 = 0.1;
+
+/// True when a blend's limits fall so far below those of the elements it joins that an
+/// exact stop serves better (a blend through a sharp corner in a tight band).
+fn too_slow(
+    shape: &Shape,
+    length: f64,
+    feed: Option<f64>,
+    cur: &Element,
+    next: &Element,
+    limits: &[Option<AxisLimits>; 9],
+) -> bool {
+    let Ok(b) = piece_limits(shape, length, feed, limits) else {
+        return true;
+    };
+    let side = |e: &Element| {
+        piece_limits(
+            &Shape::Element(e.segment.clone()),
+            e.segment.length(),
+            e.feed,
+            limits,
+        )
+        .ok()
+    };
+    let (Some(l), Some(r)) = (side(cur), side(next)) else {
+        return true;
+    };
+    b.velocity < SLOW_BLEND * l.velocity.min(r.velocity)
+        || b.acceleration < SLOW_BLEND * l.acceleration.min(r.acceleration)
 }
 
 /// The curvature vector to give `mid` at its midpoint when it can become a split point
@@ -277,6 +348,7 @@ fn try_corner(
     next: &mut Element,
     after: Option<&Element>,
     tol: f64,
+    limits: &[Option<AxisLimits>; 9],
 ) -> Option<Committed> {
     let len = cur.segment.length();
     let nlen = next.segment.length();
@@ -285,6 +357,9 @@ fn try_corner(
     let t_end = cur.segment.point(len);
     let t_start = next.segment.point(0.0);
     let theta = angle(&t_end.d1, &t_start.d1);
+    if theta > MAX_BLEND_ANGLE {
+        return None;
+    }
     let cap_left = (len - cur.trim).min(0.5 * len).max(0.0);
     let cap_right = 0.5 * nlen;
     // First guess from the corner angle (or the curvature jump of a tangent joint).
@@ -335,8 +410,15 @@ fn try_corner(
                 (Some(x), Some(y)) => Some(x.min(y)),
                 (x, y) => x.or(y),
             };
+            let shape = Shape::Blend(Box::new(curve));
+            if theta > SPLIT_MAX_ANGLE && too_slow(&shape, length, feed, cur, next, limits) {
+                return None;
+            }
+            let Shape::Blend(curve) = shape else {
+                return None;
+            };
             out.pieces
-                .push((Shape::Blend(Box::new(curve)), 0.0, length, feed, next.loc));
+                .push((Shape::Blend(curve), 0.0, length, feed, next.loc));
             next.trim = dr;
             next.split = right_split;
             return Some(out);

@@ -9,11 +9,20 @@
 //! behind a lower one is met by the braking for the lower one), and only within the distance
 //! the machine could need to brake.
 //!
-//! The candidate actions, best first:
+//! Checks and actions must agree: a state judged safe must have an action whose result is
+//! judged safe again, or the generator falls behind a braking curve and can only be clamped
+//! (a speed below zero, an acceleration step). So each speed limit is judged with the ramp
+//! the generator then follows to meet it (the limit's own acceleration and jerk), and the
+//! nearest limit ahead that the state must slow down for stands for everything behind it.
+//!
+//! The candidate actions are ramps ([`Ramp`]) towards a speed, best first:
 //! 1. *go*: the ramp towards the speed limit (or the feed hold's zero) of the current piece;
-//! 2. the largest constant jerk in [−J, J] whose result is safe (found by bisection), which
-//!    rides the braking curve in front of a lower limit;
-//! 3. *brake*: the ramp down to the lowest limit that the state cannot otherwise meet.
+//! 2. the ramp towards the highest speed, between a binding limit and the go target, whose
+//!    result is safe (found by bisection): it rides the braking curve in front of a limit.
+//!    Binding limits are tried worst first: those the state misses, those the go ramp
+//!    would miss, then a stop;
+//! 3. when none is safe (a state on a braking curve, off it by rounding): the ramp for the
+//!    worst miss, which follows that curve.
 //!
 //! Each action has |jerk| ≤ J and |a| ≤ A, the window's smallest path limits, so the
 //! per-axis limits of every piece in the window hold. Positions are integrated exactly for
@@ -32,28 +41,45 @@ pub struct Motion {
     pub a: f64,
 }
 
-/// A speed limit starting at a path position.
+/// Limits that start at a path position.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Limit {
-    /// Where it starts.
+    /// Where they start.
     pub at: f64,
     /// The speed limit from there on (0 for a stop).
     pub speed: f64,
+    /// The acceleration limit from there on.
+    pub accel_after: f64,
+    /// The smallest acceleration limit between the current position and `at`.
+    pub accel: f64,
+    /// The smallest jerk limit between the current position and `at`.
+    pub jerk: f64,
 }
 
 /// What the generator needs to know about the path ahead.
 #[derive(Debug, Clone, Default)]
 pub struct Window {
-    /// Running minima of the speed limits ahead, in path order.
+    /// Running minima of the limits ahead, in path order (the first is the current piece).
     pub limits: Vec<Limit>,
-    /// Path acceleration limit over the window.
+    /// Acceleration limit for the next period.
     pub accel: f64,
-    /// Path jerk limit over the window.
+    /// Jerk limit for the next period.
     pub jerk: f64,
 }
 
+impl Window {
+    /// The jerk that brings a negative acceleration back to zero from position `s`: the
+    /// smallest one up to the nearest limit ahead, where the pieces ahead may lower it.
+    fn easing_jerk(&self, s: f64) -> f64 {
+        self.limits
+            .iter()
+            .find(|l| l.at > s)
+            .map_or(self.jerk, |l| l.jerk.min(self.jerk))
+    }
+}
+
 /// Bisection steps for the constant-jerk action.
-const BISECTION_STEPS: usize = 18;
+const BISECTION_STEPS: usize = 20;
 
 /// Relative speed slack when comparing with a limit (rounding).
 const SPEED_SLACK: f64 = 1e-9;
@@ -61,46 +87,138 @@ const SPEED_SLACK: f64 = 1e-9;
 /// Distance slack when comparing braking distances (rounding), mm.
 const DISTANCE_SLACK: f64 = 1e-12;
 
-/// Why a state is not safe: the lowest speed limit it cannot meet, if any (`None`: the
-/// acceleration is so negative that the speed would reverse).
-type Unsafe = Option<f64>;
+/// Distance travelled while |a| is brought down to `limit` with jerk `jerk`.
+fn easing_distance(x: &Motion, limit: f64, jerk: f64) -> f64 {
+    let t = (x.a.abs() - limit).max(0.0) / jerk;
+    let j = -x.a.signum() * jerk;
+    (x.v * t + 0.5 * x.a * t * t + j * t * t * t / 6.0).max(0.0)
+}
 
-/// Checks a state against the window.
-pub fn check(x: &Motion, w: &Window) -> Result<(), Unsafe> {
-    let j = w.jerk;
-    if x.a < 0.0 && x.v - x.a * x.a / (2.0 * j) < -SPEED_SLACK {
-        return Err(None);
-    }
-    let zeroed = x.v + x.a * x.a.abs() / (2.0 * j);
-    let mut lowest: Option<f64> = None;
-    for l in &w.limits {
-        if zeroed <= l.speed * (1.0 + SPEED_SLACK) + SPEED_SLACK {
+/// How far limit `l` is missed from state `x`: the distance needed to meet it over the
+/// distance left (0 when it is met), for its speed and for its acceleration.
+fn misses(x: &Motion, l: &Limit) -> (f64, f64) {
+    let slack = (l.at - x.s).max(0.0);
+    let ratio = |need: f64| {
+        if need > slack + DISTANCE_SLACK {
+            need / slack.max(DISTANCE_SLACK)
+        } else {
+            0.0
+        }
+    };
+    let slowing = slows_for(x, l);
+    let too_fast = if slowing {
+        ratio(Ramp::new(x.v, x.a, l.speed, l.accel, l.jerk).distance())
+    } else {
+        0.0
+    };
+    // While the speed must still come down to the limit, its ramp (ending with zero
+    // acceleration there) meets the acceleration limit too.
+    let too_hard = if !slowing && x.a.abs() > l.accel_after * (1.0 + SPEED_SLACK) {
+        ratio(easing_distance(x, l.accel_after, l.jerk))
+    } else {
+        0.0
+    };
+    (too_fast, too_hard)
+}
+
+/// Makes the limits consistent backwards (the backward pass of the look-ahead): each limit's
+/// speed is lowered until the next limit can be met from it, braking with the acceleration
+/// and jerk limits of the pieces between the two. Afterwards meeting the nearest limit ahead
+/// is enough to meet all the others, and each limit's `accel`/`jerk` covers only the
+/// pieces since the limit before it.
+pub fn settle(limits: &mut [Limit]) {
+    for k in (0..limits.len().saturating_sub(1)).rev() {
+        let (here, next) = (limits[k], limits[k + 1]);
+        let room = (next.at - here.at).max(0.0);
+        let brake = |v: f64| Ramp::new(v, 0.0, next.speed, next.accel, next.jerk).distance();
+        if here.speed <= next.speed || brake(here.speed) <= room {
             continue;
         }
-        let slack = (l.at - x.s).max(0.0);
-        let need = Ramp::new(x.v, x.a, l.speed, w.accel, j).distance();
-        if need > slack + DISTANCE_SLACK {
-            lowest = Some(lowest.map_or(l.speed, |m: f64| m.min(l.speed)));
+        let (mut lo, mut hi) = (next.speed, here.speed);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if brake(mid) <= room {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
         }
-    }
-    match lowest {
-        Some(m) => Err(Some(m)),
-        None => Ok(()),
+        limits[k].speed = lo;
     }
 }
 
-/// State after `dt` with constant jerk `j`.
-fn constant_jerk(x: &Motion, j: f64, dt: f64) -> Motion {
-    Motion {
-        s: x.s + x.v * dt + 0.5 * x.a * dt * dt + j * dt * dt * dt / 6.0,
-        v: x.v + x.a * dt + 0.5 * j * dt * dt,
-        a: x.a + j * dt,
+/// The limits that bind state `x`, each with how far it misses them (see [`misses`]).
+///
+/// Limits the state stands in are always checked. Of the limits ahead, the nearest stands
+/// for the speed limits of all further ones (after [`settle`]); when the state must slow
+/// down for it, its ramp ends with zero acceleration there, so it stands for the
+/// acceleration limits further on too. Checking those further ones with their own (lower)
+/// jerk would judge a state on the nearest limit's braking curve unsafe although following
+/// that curve meets them all: the checks would contradict the actions.
+fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (&'a Limit, f64, f64)> {
+    let mut ahead = false;
+    let mut covered = false;
+    w.limits.iter().filter_map(move |l| {
+        if covered {
+            return None;
+        }
+        let (fast, hard) = misses(x, l);
+        let fast = if ahead { 0.0 } else { fast };
+        if l.at > x.s && !ahead {
+            ahead = true;
+            covered = slows_for(x, l);
+        }
+        Some((l, fast, hard))
+    })
+}
+
+/// True when `x` must slow down to meet limit `l` (or stop there: a stop is a point, not a
+/// region, so the distance to come to rest always counts).
+fn slows_for(x: &Motion, l: &Limit) -> bool {
+    let zeroed = x.v + x.a * x.a.abs() / (2.0 * l.jerk);
+    (l.speed <= 0.0 && x.v > 0.0) || zeroed > l.speed * (1.0 + SPEED_SLACK) + SPEED_SLACK
+}
+
+/// True when the state is safe: every limit in the window can still be met, and the speed
+/// can come to rest without reversing.
+pub fn check(x: &Motion, w: &Window) -> bool {
+    if x.a < 0.0 && x.v - x.a * x.a / (2.0 * w.easing_jerk(x.s)) < -SPEED_SLACK {
+        return false;
     }
+    relevant(x, w).all(|(_, fast, hard)| fast == 0.0 && hard == 0.0)
+}
+
+/// A ramp towards a speed: (target, acceleration limit, jerk limit).
+type Action = (f64, f64, f64);
+
+/// The ramps for the limits that `x` misses, the worst first (the largest ratio of
+/// distance needed to distance left); empty when it misses none.
+fn bindings(x: &Motion, w: &Window) -> Vec<Action> {
+    let mut found: Vec<(Action, f64)> = Vec::new();
+    for (l, too_fast, too_hard) in relevant(x, w) {
+        let urgency = if too_fast > 0.0 { too_fast } else { too_hard };
+        if urgency <= 0.0 {
+            continue;
+        }
+        // The speed ramp is the one the check judges (its acceleration and jerk), so
+        // following it keeps the limit met; it ends with zero acceleration at the limit,
+        // so it meets the acceleration limit there too: prefer it whenever the speed is
+        // missed. Easing the acceleration uses the current piece's jerk (at least the
+        // limit's), which eases no later than the check assumes.
+        let ramp = if too_fast > 0.0 {
+            (l.speed, l.accel.min(w.accel), l.jerk.min(w.jerk))
+        } else {
+            (l.speed.min(x.v), l.accel_after.min(w.accel), w.jerk)
+        };
+        found.push((ramp, urgency));
+    }
+    found.sort_by(|a, b| b.1.total_cmp(&a.1));
+    found.into_iter().map(|f| f.0).collect()
 }
 
 /// State after following the ramp to `target` for `dt`.
-fn ramp_step(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
-    let r = Ramp::new(x.v, x.a, target, w.accel, w.jerk).state(dt);
+fn ramp_step(x: &Motion, target: f64, accel: f64, jerk: f64, dt: f64) -> Motion {
+    let r = Ramp::new(x.v, x.a, target, accel, jerk).state(dt);
     Motion {
         s: x.s + r.s,
         v: r.v,
@@ -110,33 +228,40 @@ fn ramp_step(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
 
 /// The state one period `dt` on, heading for `target` speed.
 pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
-    let go = ramp_step(x, target, w, dt);
-    let go_fail = match check(&go, w) {
-        Ok(()) => return go,
-        Err(e) => e,
-    };
-    let j = w.jerk;
-    let low = constant_jerk(x, -j, dt);
-    match check(&low, w) {
-        Ok(()) => {
-            let (mut lo, mut hi) = (-j, j);
-            for _ in 0..BISECTION_STEPS {
-                let mid = 0.5 * (lo + hi);
-                if check(&constant_jerk(x, mid, dt), w).is_ok() {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            constant_jerk(x, lo, dt)
-        }
-        Err(low_fail) => {
-            let to = match (low_fail, go_fail) {
-                (Some(p), Some(q)) => p.min(q),
-                (Some(p), None) | (None, Some(p)) => p,
-                (None, None) => target.min(x.v),
-            };
-            ramp_step(x, to.min(target).max(0.0), w, dt)
-        }
+    let go = ramp_step(x, target, w.accel, w.jerk, dt);
+    if check(&go, w) {
+        return go;
     }
+    // Candidate ramps: towards the limits the state itself misses, worst first, then
+    // towards those the go ramp would miss, then a stop. The first whose result is safe
+    // bounds a bisection for the highest safe speed between it and the go target: the
+    // ramp rides the braking curve in front of the binding limit.
+    let mut candidates = bindings(x, w);
+    candidates.extend(bindings(&go, w));
+    candidates.push((0.0, w.accel, w.easing_jerk(x.s)));
+    let mut fallback = None;
+    for &(low, accel, jerk) in &candidates {
+        let low = low.min(target).max(0.0);
+        let brake = ramp_step(x, low, accel, jerk, dt);
+        if !check(&brake, w) {
+            fallback.get_or_insert(brake);
+            continue;
+        }
+        let (mut lo, mut hi) = (low, target);
+        let mut best = brake;
+        for _ in 0..BISECTION_STEPS {
+            let mid = 0.5 * (lo + hi);
+            let trial = ramp_step(x, mid, accel, jerk, dt);
+            if check(&trial, w) {
+                lo = mid;
+                best = trial;
+            } else {
+                hi = mid;
+            }
+        }
+        return best;
+    }
+    // No ramp keeps every limit (a state on a braking curve, off it by rounding): the one
+    // for the worst miss follows that curve.
+    fallback.unwrap_or(go)
 }
