@@ -39,6 +39,17 @@ pub trait ModbusDevice: Send {
 /// A device shared between the line and a test or the runtime.
 pub type SharedDevice = Arc<Mutex<dyn ModbusDevice>>;
 
+/// Addresses `address`, `address + 1`, … for `count` registers; an address beyond 0xFFFF is an
+/// illegal data address (the request names registers that cannot exist).
+pub fn addresses(address: u16, count: usize) -> impl Iterator<Item = Result<u16, ExceptionCode>> {
+    (0..count).map(move |i| {
+        u16::try_from(i)
+            .ok()
+            .and_then(|i| address.checked_add(i))
+            .ok_or(ExceptionCode::IllegalDataAddress)
+    })
+}
+
 /// Locks a shared device; a poisoned lock still gives the data.
 pub fn lock_device(device: &SharedDevice) -> MutexGuard<'_, dyn ModbusDevice + 'static> {
     device.lock().unwrap_or_else(|p| p.into_inner())

@@ -7,7 +7,7 @@ use klar_drivers::modbus::{RegisterTable, ServoRegisterMap};
 use klar_motion::{AxisFault, AxisState, Setpoint};
 use tokio_modbus::prelude::ExceptionCode;
 
-use super::bus::ModbusDevice;
+use super::bus::{ModbusDevice, addresses};
 use crate::plant::{ServoPlant, SimAxisParams};
 
 /// Internal control period of the simulated drive, seconds.
@@ -274,24 +274,16 @@ impl ModbusDevice for SimModbusServo {
         now: f64,
     ) -> Result<Vec<u16>, ExceptionCode> {
         self.advance(now);
-        (0..count)
-            .map(|i| {
-                let a = address
-                    .checked_add(i)
-                    .ok_or(ExceptionCode::IllegalDataAddress)?;
-                self.read_one(table, a)
-            })
+        addresses(address, usize::from(count))
+            .map(|a| self.read_one(table, a?))
             .collect()
     }
 
     fn write(&mut self, address: u16, values: &[u16], now: f64) -> Result<(), ExceptionCode> {
         self.advance(now);
         let t = self.map.target_position;
-        for (i, v) in values.iter().enumerate() {
-            let a = u16::try_from(i)
-                .ok()
-                .and_then(|i| address.checked_add(i))
-                .ok_or(ExceptionCode::IllegalDataAddress)?;
+        for (a, v) in addresses(address, values.len()).zip(values) {
+            let a = a?;
             if a == t {
                 self.target_words[0] = *v;
             } else if Some(a) == t.checked_add(1) {

@@ -8,7 +8,7 @@ use klar_drivers::modbus::words::{bit, with_bit};
 use klar_drivers::modbus::{RegisterTable, VfdProfile};
 use tokio_modbus::prelude::ExceptionCode;
 
-use super::bus::ModbusDevice;
+use super::bus::{ModbusDevice, addresses};
 use super::spindle::{SpindleModel, SpindleParams};
 
 /// A simulated VFD on the line.
@@ -202,24 +202,15 @@ impl ModbusDevice for SimModbusVfd {
         now: f64,
     ) -> Result<Vec<u16>, ExceptionCode> {
         self.advance(now);
-        (0..count)
-            .map(|i| {
-                let a = address
-                    .checked_add(i)
-                    .ok_or(ExceptionCode::IllegalDataAddress)?;
-                self.read_one(table, a)
-            })
+        addresses(address, usize::from(count))
+            .map(|a| self.read_one(table, a?))
             .collect()
     }
 
     fn write(&mut self, address: u16, values: &[u16], now: f64) -> Result<(), ExceptionCode> {
         self.advance(now);
-        for (i, v) in values.iter().enumerate() {
-            let a = u16::try_from(i)
-                .ok()
-                .and_then(|i| address.checked_add(i))
-                .ok_or(ExceptionCode::IllegalDataAddress)?;
-            self.write_one(a, *v)?;
+        for (a, v) in addresses(address, values.len()).zip(values) {
+            self.write_one(a?, *v)?;
             self.writes += 1;
         }
         Ok(())
