@@ -5,10 +5,11 @@
 //! same at u = 1 with B, t₁, k₁. Since k ⊥ t, the arc-length derivatives at the ends are
 //! exactly t and k: the curve continues position, tangent and curvature of its neighbours.
 //!
-//! Path distance is the arc length over X Y Z U V W, tabulated with 3-point Gauss–Legendre
-//! quadrature on [`TABLE_INTERVALS`] intervals of u and inverted by Newton steps.
+//! Path distance is the arc length over X Y Z U V W, tabulated by [`crate::geom::arclen`]
+//! (Gauss–Legendre quadrature on [`TABLE_INTERVALS`] intervals of u, inverted by safeguarded
+//! Newton steps).
 
-use crate::geom::{AxisBounds, Metric, PathPoint};
+use crate::geom::{AxisBounds, Metric, PathPoint, arclen};
 use klar_interp::Pose;
 
 /// Intervals of u in the arc-length table.
@@ -23,11 +24,6 @@ const BOUND_MARGIN: f64 = 1.1;
 /// Smallest accepted parameter speed |P′(u)| relative to the chord: below it the curve
 /// nearly stops and turns (a cusp), which no axis could follow at speed.
 const MIN_PARAMETER_SPEED: f64 = 1e-3;
-
-/// 3-point Gauss–Legendre abscissae on [-1, 1].
-const GL_X: [f64; 3] = [-0.774_596_669_241_483_4, 0.0, 0.774_596_669_241_483_4];
-/// Weights matching [`GL_X`].
-const GL_W: [f64; 3] = [5.0 / 9.0, 8.0 / 9.0, 5.0 / 9.0];
 
 /// A quintic blend curve.
 #[derive(Debug, Clone, PartialEq)]
@@ -97,13 +93,10 @@ impl Quintic {
                 return None;
             }
         }
-        let mut total = 0.0;
-        for k in 0..TABLE_INTERVALS {
-            let a = k as f64 / TABLE_INTERVALS as f64;
-            let b = (k + 1) as f64 / TABLE_INTERVALS as f64;
-            total += q.integrate(a, b);
-            q.table[k + 1] = total;
-        }
+        let mut table = [0.0; TABLE_INTERVALS + 1];
+        arclen::fill_table(&mut table, |u| q.speed(u));
+        q.table = table;
+        let total = table[TABLE_INTERVALS];
         if !(total.is_finite() && total > 0.0) {
             return None;
         }
@@ -139,16 +132,6 @@ impl Quintic {
         sum.sqrt()
     }
 
-    /// Arc length from u = a to u = b.
-    fn integrate(&self, a: f64, b: f64) -> f64 {
-        let (m, h) = (0.5 * (a + b), 0.5 * (b - a));
-        GL_X.iter()
-            .zip(&GL_W)
-            .map(|(x, w)| w * self.speed(m + h * x))
-            .sum::<f64>()
-            * h
-    }
-
     /// Path length (mm).
     pub fn length(&self) -> f64 {
         self.table[TABLE_INTERVALS]
@@ -166,31 +149,7 @@ impl Quintic {
 
     /// The parameter u at path distance `s` (clamped to the curve).
     pub fn parameter_at(&self, s: f64) -> f64 {
-        let len = self.length();
-        if s <= 0.0 {
-            return 0.0;
-        }
-        if s >= len {
-            return 1.0;
-        }
-        let k = self
-            .table
-            .partition_point(|&x| x <= s)
-            .clamp(1, TABLE_INTERVALS)
-            - 1;
-        let (lo, hi) = (self.table[k], self.table[k + 1]);
-        let h = 1.0 / TABLE_INTERVALS as f64;
-        let u0 = k as f64 * h;
-        let mut u = u0 + h * ((s - lo) / (hi - lo).max(f64::MIN_POSITIVE));
-        for _ in 0..3 {
-            let f = lo + self.integrate(u0, u) - s;
-            let sp = self.speed(u);
-            if sp <= 0.0 {
-                break;
-            }
-            u = (u - f / sp).clamp(u0, u0 + h);
-        }
-        u
+        arclen::parameter_at(&self.table, s, |u| self.speed(u))
     }
 
     /// Pose and its first two derivatives with respect to path distance at `s`; exactly

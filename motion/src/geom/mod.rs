@@ -6,6 +6,7 @@
 //! and end poses exactly at `s = 0` and `s = length`.
 
 pub mod arc;
+pub mod arclen;
 pub mod line;
 pub mod poly;
 

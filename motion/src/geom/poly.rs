@@ -11,7 +11,9 @@
 //! smooth cubic the maxima between samples differ far less than that, but it is a sampled
 //! bound, not a proven one. Curves whose parameter speed nearly vanishes (cusps) are refused.
 
-use super::{AxisBounds, GeomError, Metric, PathPoint, ZERO_LENGTH, delta, finite_pose, letter};
+use super::{
+    AxisBounds, GeomError, Metric, PathPoint, ZERO_LENGTH, arclen, delta, finite_pose, letter,
+};
 use klar_interp::Pose;
 use klar_interp::op::SplineAxis;
 
@@ -32,23 +34,6 @@ const BOUND_MARGIN: f64 = 1.1;
 /// Smallest accepted ratio of the parameter speed |dP/du| to its mean: below it the curve
 /// (nearly) stops and turns, which no finite axis acceleration can follow at speed.
 const MIN_PARAMETER_SPEED: f64 = 1e-6;
-
-/// Gauss–Legendre abscissae on [-1, 1] (5 points).
-const GL_X: [f64; 5] = [
-    -0.906_179_845_938_664,
-    -0.538_469_310_105_683_1,
-    0.0,
-    0.538_469_310_105_683_1,
-    0.906_179_845_938_664,
-];
-/// Gauss–Legendre weights matching [`GL_X`].
-const GL_W: [f64; 5] = [
-    0.236_926_885_056_189_1,
-    0.478_628_670_499_366_5,
-    0.568_888_888_888_888_9,
-    0.478_628_670_499_366_5,
-    0.236_926_885_056_189_1,
-];
 
 /// A spline segment parameterised by arc length.
 #[derive(Debug, Clone, PartialEq)]
@@ -125,24 +110,9 @@ impl Poly {
     }
 
     fn build_table(&mut self) {
-        let h = 1.0 / TABLE_INTERVALS as f64;
-        let mut acc = 0.0;
-        self.table[0] = 0.0;
-        for i in 0..TABLE_INTERVALS {
-            acc += self.integrate(i as f64 * h, (i + 1) as f64 * h);
-            self.table[i + 1] = acc;
-        }
-    }
-
-    /// Arc length between two parameter values (one Gauss–Legendre panel).
-    fn integrate(&self, a: f64, b: f64) -> f64 {
-        let half = 0.5 * (b - a);
-        let mid = 0.5 * (a + b);
-        GL_X.iter()
-            .zip(&GL_W)
-            .map(|(x, w)| w * self.speed(mid + half * x))
-            .sum::<f64>()
-            * half
+        let mut table = [0.0; TABLE_INTERVALS + 1];
+        arclen::fill_table(&mut table, |u| self.speed(u));
+        self.table = table;
     }
 
     /// |dP/du| in the metric.
@@ -189,47 +159,7 @@ impl Poly {
 
     /// The polynomial parameter u = 1 − t at path distance `s`.
     pub fn parameter_at(&self, s: f64) -> f64 {
-        let len = self.length();
-        if s <= 0.0 {
-            return 0.0;
-        }
-        if s >= len {
-            return 1.0;
-        }
-        let h = 1.0 / TABLE_INTERVALS as f64;
-        let i = self
-            .table
-            .partition_point(|&c| c <= s)
-            .saturating_sub(1)
-            .min(TABLE_INTERVALS - 1);
-        let (c0, c1) = (self.table[i], self.table[i + 1]);
-        let (mut lo, mut hi) = (i as f64 * h, (i + 1) as f64 * h);
-        let u0 = lo;
-        let target = s - c0;
-        let mut u = if c1 > c0 {
-            lo + h * target / (c1 - c0)
-        } else {
-            lo
-        };
-        for _ in 0..40 {
-            let g = self.integrate(u0, u) - target;
-            if g.abs() <= 1e-13 * len.max(1.0) {
-                break;
-            }
-            if g > 0.0 {
-                hi = u;
-            } else {
-                lo = u;
-            }
-            let sp = self.speed(u);
-            let next = if sp > 0.0 { u - g / sp } else { f64::NAN };
-            u = if next > lo && next < hi {
-                next
-            } else {
-                0.5 * (lo + hi)
-            };
-        }
-        u
+        arclen::parameter_at(&self.table, s, |u| self.speed(u))
     }
 
     /// Pose and derivatives with respect to path distance at `s`; exactly `from` at the
