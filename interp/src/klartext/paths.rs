@@ -11,7 +11,7 @@ use super::exec::{
 use super::geom;
 use super::parser::{Stmt, Words};
 use crate::diag::ProgramError;
-use crate::op::{AxisLetter, OpKind, Plane, Pose};
+use crate::op::{AxisLetter, Feed, OpKind, Plane, Pose};
 
 impl Machine {
     pub(super) fn direction(w: &Words, block: &'static str) -> Result<bool, ExecError> {
@@ -24,6 +24,23 @@ impl Machine {
         })
     }
 
+    /// A straight move to `to` (None when it goes nowhere).
+    fn line_to(
+        &self,
+        from: Pose,
+        to: Pose,
+        feed: Option<Feed>,
+    ) -> Result<Option<OpKind>, ExecError> {
+        if to == from {
+            return Ok(None);
+        }
+        Ok(Some(OpKind::Line {
+            from,
+            to,
+            feed: self.need_feed(feed)?,
+        }))
+    }
+
     /// Computes the motion op of a path block (None when nothing moves).
     pub(super) fn motion(&mut self, stmt: &Stmt, w: &Words) -> Result<Option<OpKind>, ExecError> {
         let feed = self.feed(w.feed)?;
@@ -34,25 +51,11 @@ impl Machine {
                 if let Some((longer, pos)) = w.paraxial {
                     to = self.paraxial(from, to, longer, pos)?;
                 }
-                if to == from {
-                    return Ok(None);
-                }
-                Ok(Some(OpKind::Line {
-                    from,
-                    to,
-                    feed: self.need_feed(feed)?,
-                }))
+                self.line_to(from, to, feed)
             }
             Stmt::LinePolar => {
                 let to = self.polar_end(w, "LP")?;
-                if to == from {
-                    return Ok(None);
-                }
-                Ok(Some(OpKind::Line {
-                    from,
-                    to,
-                    feed: self.need_feed(feed)?,
-                }))
+                self.line_to(from, to, feed)
             }
             Stmt::Circle => {
                 let pole = self.pole_for("C")?;
