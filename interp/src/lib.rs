@@ -7,6 +7,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cycles;
 pub mod diag;
 pub mod dialect;
 pub mod din;
