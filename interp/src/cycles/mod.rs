@@ -10,6 +10,11 @@
 
 use crate::op::SpindleDir;
 
+mod drill;
+mod pattern;
+mod pocket;
+mod sl;
+
 /// A point in the working-plane frame: `[a, b, tool axis]`, mm.
 pub type P3 = [f64; 3];
 
@@ -143,8 +148,7 @@ pub enum CycleError {
 
 /// True when `number` is a call-active cycle that [`generate`] knows.
 pub fn is_call_active(number: u32) -> bool {
-    let _ = number;
-    false
+    drill::knows(number) || pocket::knows(number) || sl::knows(number)
 }
 
 /// Appends the motion of cycle `number` with parameters `p`, called at `ctx`, to `out`.
@@ -155,15 +159,24 @@ pub fn generate(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let _ = (p, ctx, out);
-    Err(CycleError::Unknown(number))
+    let mark = out.len();
+    let r = if drill::knows(number) {
+        drill::generate(number, p, ctx, out)
+    } else if pocket::knows(number) {
+        pocket::generate(number, p, ctx, out)
+    } else {
+        Err(CycleError::Unknown(number))
+    };
+    if r.is_err() {
+        out.truncate(mark);
+    }
+    r
 }
 
 /// True when `number` is a DEF-active pattern cycle (220, 221) that calls the last defined
 /// machining cycle at each of its positions as soon as it is defined.
 pub fn is_pattern(number: u32) -> bool {
-    let _ = number;
-    false
+    pattern::knows(number)
 }
 
 /// Runs pattern cycle `pattern` (220, 221) with parameters `pp`: at each of its positions
@@ -178,8 +191,12 @@ pub fn generate_pattern(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let _ = (pp, machining, mp, ctx, out);
-    Err(CycleError::Unknown(pattern))
+    let mark = out.len();
+    let r = pattern::generate(pattern, pp, machining, mp, ctx, out);
+    if r.is_err() {
+        out.truncate(mark);
+    }
+    r
 }
 
 /// Runs the machining cycle `machining` at each of `points` (`PATTERN DEF` + `CYCL CALL
@@ -193,8 +210,12 @@ pub fn generate_at_points(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let _ = (points, mp, ctx, out);
-    Err(CycleError::Unknown(machining))
+    let mark = out.len();
+    let r = pattern::at_points(points, machining, mp, ctx, out);
+    if r.is_err() {
+        out.truncate(mark);
+    }
+    r
 }
 
 /// One element of a closed contour in the working plane, for the SL cycles (14, 20–24):
@@ -243,6 +264,10 @@ pub fn generate_sl(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let _ = (contours, p20, p, ctx, out);
-    Err(CycleError::Unknown(cycle))
+    let mark = out.len();
+    let r = sl::generate(cycle, contours, p20, p, ctx, out);
+    if r.is_err() {
+        out.truncate(mark);
+    }
+    r
 }
