@@ -262,6 +262,22 @@ pub struct MachineConfig {
     /// Faults injected into the simulated axes (see docs/safety.md).
     #[serde(default, rename = "fault")]
     pub faults: Vec<crate::faults::FaultConfig>,
+    /// How late a setpoint may reach the axes before the run counts a setpoint underrun and
+    /// stops on the path, s (default [`DEFAULT_LATENESS_PERIODS`] servo periods).
+    #[serde(default)]
+    pub max_setpoint_lateness: Option<f64>,
+}
+
+/// Default setpoint lateness that ends a run, in servo periods. Drives in cyclic synchronous
+/// modes ride through a few missed SYNC periods by extrapolating; beyond that they fault.
+pub const DEFAULT_LATENESS_PERIODS: f64 = 10.0;
+
+impl MachineConfig {
+    /// The setpoint lateness that counts as an underrun and stops the run, s.
+    pub fn setpoint_lateness_limit(&self) -> f64 {
+        self.max_setpoint_lateness
+            .unwrap_or(DEFAULT_LATENESS_PERIODS * self.servo_period)
+    }
 }
 
 fn default_true() -> bool {
@@ -506,11 +522,41 @@ impl MachineConfig {
                 Some(l) if !self.axes.iter().any(|a| a.letter == l) => {
                     return Err(format!("fault {:?}: no axis {l} on this machine", f.kind));
                 }
-                None if f.kind != crate::faults::FaultKind::Estop => {
+                None if !matches!(
+                    f.kind,
+                    crate::faults::FaultKind::Estop
+                        | crate::faults::FaultKind::Stall
+                        | crate::faults::FaultKind::Spindle
+                ) =>
+                {
                     return Err(format!("fault {:?} at {} s needs an axis", f.kind, f.at));
                 }
                 _ => {}
             }
+            if f.kind == crate::faults::FaultKind::Spindle
+                && !matches!(
+                    self.spindle.as_ref().map(|s| &s.backend),
+                    Some(SpindleBackendConfig::Sim(_))
+                )
+            {
+                return Err(format!(
+                    "fault {:?} at {} s needs a simulated spindle",
+                    f.kind, f.at
+                ));
+            }
+            if let Some(d) = f.duration
+                && !(d.is_finite() && d > 0.0)
+            {
+                return Err(format!("fault {:?}: duration must be seconds > 0", f.kind));
+            }
+        }
+        if let Some(l) = self.max_setpoint_lateness
+            && !(l.is_finite() && l >= self.servo_period)
+        {
+            return Err(format!(
+                "max_setpoint_lateness {l} must be at least one servo period ({} s)",
+                self.servo_period
+            ));
         }
         if let Some(s) = &self.spindle {
             positive("spindle.max_rpm", s.max_rpm)?;

@@ -31,7 +31,15 @@ pub enum FaultKind {
     Limit,
     /// The e-stop chain opens (all axes).
     Estop,
+    /// The servo loop stalls: the next setpoint comes `duration` seconds late (a setpoint
+    /// underrun). Not an axis fault: the runtime handles it.
+    Stall,
+    /// The simulated spindle drive faults (fault `code`, default 1).
+    Spindle,
 }
+
+/// Default length of a `stall` fault when the entry gives none, s.
+pub const DEFAULT_STALL_SECONDS: f64 = 0.05;
 
 impl FaultKind {
     fn parse(s: &str) -> Option<Self> {
@@ -42,6 +50,8 @@ impl FaultKind {
             "stuck" => FaultKind::Stuck,
             "limit" => FaultKind::Limit,
             "estop" => FaultKind::Estop,
+            "stall" => FaultKind::Stall,
+            "spindle" => FaultKind::Spindle,
             _ => return None,
         })
     }
@@ -64,6 +74,9 @@ pub struct FaultConfig {
     /// Noise amplitude in encoder counts (`noise` only).
     #[serde(default)]
     pub amplitude: Option<u32>,
+    /// How late the setpoint comes, s (`stall` only; default [`DEFAULT_STALL_SECONDS`]).
+    #[serde(default)]
+    pub duration: Option<f64>,
 }
 
 /// Why a fault specification is not usable.
@@ -73,7 +86,7 @@ pub enum FaultSpecError {
     #[error("fault `{0}`: expected KIND[:AXIS]@SECONDS, e.g. drive:X@0.5 or estop@1.2")]
     Form(String),
     /// Unknown kind.
-    #[error("fault `{0}`: unknown kind (drive, comm, noise, stuck, limit, estop)")]
+    #[error("fault `{0}`: unknown kind (drive, comm, noise, stuck, limit, estop, stall, spindle)")]
     Kind(String),
     /// The time is not a finite number >= 0.
     #[error("fault `{0}`: the time must be a number of seconds >= 0")]
@@ -125,14 +138,16 @@ impl FromStr for FaultConfig {
             axis,
             code: None,
             amplitude: None,
+            duration: None,
         })
     }
 }
 
 impl FaultConfig {
-    /// The fault as the simulator injects it.
-    pub fn injected(&self) -> InjectedFault {
-        match self.kind {
+    /// The fault as the simulator injects it; `None` for a fault of the runtime itself
+    /// (`stall`).
+    pub fn injected(&self) -> Option<InjectedFault> {
+        Some(match self.kind {
             FaultKind::Drive => InjectedFault::Drive {
                 code: self.code.unwrap_or(FAULT_INJECTED),
             },
@@ -143,7 +158,13 @@ impl FaultConfig {
             FaultKind::Stuck => InjectedFault::Stuck,
             FaultKind::Limit => InjectedFault::LimitSwitch,
             FaultKind::Estop => InjectedFault::EStop,
-        }
+            FaultKind::Stall | FaultKind::Spindle => return None,
+        })
+    }
+
+    /// The length of a `stall` fault, s.
+    pub fn stall_seconds(&self) -> f64 {
+        self.duration.unwrap_or(DEFAULT_STALL_SECONDS)
     }
 }
 
@@ -197,6 +218,9 @@ impl SimAxes {
     pub fn schedule(&self, faults: &[FaultConfig]) -> Result<(), FaultSpecError> {
         let mut entries = Vec::new();
         for f in faults {
+            let Some(fault) = f.injected() else {
+                continue;
+            };
             let axis = match (f.kind, f.axis) {
                 (FaultKind::Estop, _) => 0,
                 (k, None) => return Err(FaultSpecError::NeedsAxis(k, f.at)),
@@ -207,7 +231,7 @@ impl SimAxes {
             entries.push(ScheduledFault {
                 at: f.at,
                 axis,
-                fault: f.injected(),
+                fault,
             });
         }
         if let Ok(mut b) = self.backend.lock() {
@@ -280,6 +304,49 @@ impl AxisBackend for SharedSimBackend {
         feedback: &mut [AxisFeedback],
     ) -> Result<(), BackendError> {
         self.with(|b| b.cycle(t, setpoints, feedback))
+    }
+}
+
+/// A simulated spindle that faults at scheduled machine times (`spindle` faults).
+pub struct ScheduledSpindle {
+    inner: klar_sim::modbus::SimSpindle,
+    /// (machine time, fault code), by time.
+    pending: std::collections::VecDeque<(f64, u16)>,
+}
+
+impl ScheduledSpindle {
+    /// Wraps `inner`; the `spindle` entries of `faults` strike at their times.
+    pub fn new(inner: klar_sim::modbus::SimSpindle, faults: &[FaultConfig]) -> Self {
+        let mut pending: Vec<(f64, u16)> = faults
+            .iter()
+            .filter(|f| f.kind == FaultKind::Spindle)
+            .map(|f| {
+                let code = f.code.and_then(|c| u16::try_from(c).ok()).unwrap_or(1);
+                (f.at, code)
+            })
+            .collect();
+        pending.sort_by(|a, b| a.0.total_cmp(&b.0));
+        Self {
+            inner,
+            pending: pending.into(),
+        }
+    }
+}
+
+impl klar_motion::SpindleBackend for ScheduledSpindle {
+    fn command(&mut self, rpm: f64) -> Result<(), BackendError> {
+        self.inner.command(rpm)
+    }
+
+    fn cycle(&mut self, t: f64) -> Result<klar_motion::SpindleFeedback, BackendError> {
+        while let Some(&(at, code)) = self.pending.front() {
+            if at > t {
+                break;
+            }
+            self.pending.pop_front();
+            self.inner.model_mut().inject_fault(code);
+        }
+        self.inner.cycle(t)
     }
 }
 

@@ -298,7 +298,10 @@ impl MachineIo {
             Some(s) => {
                 let backend: Box<dyn SpindleBackend> = match &s.backend {
                     SpindleBackendConfig::Sim(sim) => {
-                        Box::new(SimSpindle::new(sim_spindle_params(s.max_rpm, sim)))
+                        Box::new(crate::faults::ScheduledSpindle::new(
+                            SimSpindle::new(sim_spindle_params(s.max_rpm, sim)),
+                            &config.faults,
+                        ))
                     }
                     SpindleBackendConfig::Canopen(_) => can_spindle.take().ok_or_else(|| {
                         open_err("spindle", &"the CANopen backend has no spindle drive")

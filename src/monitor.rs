@@ -154,6 +154,13 @@ pub enum StopCause {
     Spindle(String),
     /// An error of the program reached at run time.
     Program(String),
+    /// Setpoints reached the axes too late.
+    Underrun {
+        /// How late, s.
+        late: f64,
+        /// The machine's limit, s.
+        limit: f64,
+    },
     /// The operator asked for a stop.
     Requested,
 }
@@ -168,6 +175,12 @@ impl fmt::Display for StopCause {
             StopCause::Communication(m) => write!(f, "communication: {m}"),
             StopCause::Spindle(m) => write!(f, "spindle: {m}"),
             StopCause::Program(m) => write!(f, "program: {m}"),
+            StopCause::Underrun { late, limit } => write!(
+                f,
+                "setpoint underrun: {:.1} ms late (limit {:.1} ms)",
+                late * 1e3,
+                limit * 1e3
+            ),
             StopCause::Requested => write!(f, "stop requested"),
         }
     }

@@ -62,7 +62,8 @@ pub struct RunReport {
     pub cycles: u64,
     /// Largest |following error| per machine axis.
     pub max_following_error: Vec<(AxisLetter, f64)>,
-    /// Realtime mode: cycles that started later than one servo period behind schedule.
+    /// Cycles whose setpoints reached the axes later than one servo period behind schedule
+    /// (measured on the wall clock in realtime mode; injected `stall` faults in both modes).
     pub underruns: u64,
     /// Seconds spent waiting for the spindle to reach speed.
     pub spindle_wait: f64,
@@ -95,6 +96,19 @@ pub enum RunError {
         axis: AxisLetter,
         /// What it reported.
         fault: AxisFault,
+        /// Program line being executed.
+        line: u32,
+        /// Block number being executed, if the block has one.
+        block: Option<u64>,
+    },
+    /// The setpoints reached the axes too late (setpoint underrun): the run stopped on the
+    /// path.
+    #[error("setpoint underrun: a setpoint came {:.1} ms late, the limit is {:.1} ms (at {})", .late * 1e3, .limit * 1e3, where_text(*line, *block))]
+    Underrun {
+        /// How late, s.
+        late: f64,
+        /// The machine's limit, s.
+        limit: f64,
         /// Program line being executed.
         line: u32,
         /// Block number being executed, if the block has one.
@@ -179,6 +193,11 @@ pub struct Run<'a, 'w> {
     stopping: Option<PendingStop>,
     /// The report of the stop that ended the run.
     stop_report: Option<StopReport>,
+    /// Injected servo-loop stalls not yet struck: (machine time, seconds), by time.
+    stalls: VecDeque<(f64, f64)>,
+    /// Wall-clock lateness counts against the limit (some axis is not simulated, or the
+    /// machine sets the limit explicitly).
+    enforce_wall_lateness: bool,
 }
 
 /// `; the first: <diagnostic>` when there is one.
@@ -214,9 +233,40 @@ impl Run<'_, '_> {
             let now = Instant::now();
             if now < due {
                 std::thread::sleep(due - now);
-            } else if now - due > Duration::from_secs_f64(self.config.servo_period) {
-                self.report.underruns += 1;
             }
+        }
+        let (wall, injected) = self.lateness(t);
+        let late = wall + injected;
+        if late > self.config.servo_period {
+            self.report.underruns += 1;
+        }
+        // Simulated plants run on machine time and do not mind a late wall clock: on an
+        // all-simulated machine only injected stalls (or an explicit limit) stop the run.
+        let counted = if self.enforce_wall_lateness {
+            late
+        } else {
+            injected
+        };
+        let limit = self.config.setpoint_lateness_limit();
+        if counted > limit && self.stopping.is_none() {
+            tracing::error!(
+                line = self.line,
+                "setpoint underrun: {counted:.4} s late: feed hold"
+            );
+            let block = self.last_loc.and_then(|l| l.block);
+            self.begin_path_stop(
+                StopCause::Underrun {
+                    late: counted,
+                    limit,
+                },
+                None,
+                RunError::Underrun {
+                    late: counted,
+                    limit,
+                    line: self.line,
+                    block,
+                },
+            );
         }
         self.io.cycle(t)?;
         self.record_cycle(t)?;
@@ -257,6 +307,30 @@ impl Run<'_, '_> {
             );
         }
         Ok(())
+    }
+
+    /// How late the setpoints of the cycle due at machine time `t` reach the axes, s: the
+    /// wall-clock delay in realtime mode, and any injected stall that strikes now (which a
+    /// realtime run also really waits out).
+    fn lateness(&mut self, t: f64) -> (f64, f64) {
+        let mut wall = 0.0;
+        if self.report.realtime {
+            let due = self.wall_start + Duration::from_secs_f64(t);
+            wall = Instant::now().saturating_duration_since(due).as_secs_f64();
+        }
+        let mut late = 0.0;
+        while let Some(&(at, seconds)) = self.stalls.front() {
+            if at > t {
+                break;
+            }
+            self.stalls.pop_front();
+            if self.report.realtime {
+                std::thread::sleep(Duration::from_secs_f64(seconds));
+                self.wall_start += Duration::from_secs_f64(seconds);
+            }
+            late += seconds;
+        }
+        (wall, late)
     }
 
     /// Bookkeeping after a cycle: time, measured positions, figures, trace row.
@@ -612,6 +686,21 @@ impl<'a, 'w> Run<'a, 'w> {
                 .collect(),
             stopping: None,
             stop_report: None,
+            stalls: {
+                let mut s: Vec<(f64, f64)> = config
+                    .faults
+                    .iter()
+                    .filter(|f| f.kind == crate::faults::FaultKind::Stall)
+                    .map(|f| (f.at, f.stall_seconds()))
+                    .collect();
+                s.sort_by(|a, b| a.0.total_cmp(&b.0));
+                s.into()
+            },
+            enforce_wall_lateness: config.max_setpoint_lateness.is_some()
+                || config
+                    .axes
+                    .iter()
+                    .any(|a| !matches!(a.backend, crate::config::BackendConfig::Sim(_))),
             letters,
         })
     }

@@ -105,6 +105,7 @@ fn run_case(case: &Case) -> Outcome {
         axis: case.axis,
         code: None,
         amplitude: (case.kind == FaultKind::Noise).then_some(20_000),
+        duration: None,
     }];
     let letters = config.letters();
     let dt = config.servo_period;
@@ -173,6 +174,8 @@ fn run_case(case: &Case) -> Outcome {
             );
         }
         FaultKind::Estop => assert_eq!(fault, AxisFault::EStop, "{label}"),
+        // Stops on the path, not quick stops: tests/faults_path.rs.
+        FaultKind::Stall | FaultKind::Spindle => unreachable!("{label}: not in this matrix"),
         FaultKind::Stuck | FaultKind::Noise => {
             assert_eq!(Some(axis), case.axis, "{label}");
             assert!(
