@@ -27,5 +27,6 @@ pub use klartext::contour::SPLINE_START_TOLERANCE;
 pub use klartext::exec::{Blank, C_RADIUS_TOLERANCE, MAX_IPA};
 pub use klartext::tools::{Tool, ToolTable, ToolTableError};
 pub use op::{
-    ApproachShape, AxisLetter, CompSide, Feed, Op, OpKind, Plane, Pose, SourceLoc, SplineAxis,
+    ApproachShape, AxisLetter, CompSide, CornerRule, Feed, Op, OpKind, Plane, Pose, SourceLoc,
+    SplineAxis,
 };

@@ -202,6 +202,19 @@ pub enum Feed {
     PerRevolution(f64),
 }
 
+/// A block-wise corner rule of radius compensation (TNC M97 / M98).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum CornerRule {
+    /// M97, small contour steps: at an outside corner the offset paths are extended to
+    /// their intersection instead of rolling around the corner on a transition arc.
+    Intersect,
+    /// M98, open contour corner: at an inside corner the offset paths are not cut at their
+    /// intersection; the first runs to its full end, a straight move joins it to the full
+    /// start of the second, so both corners are machined completely.
+    Open,
+}
+
 /// Side of tool radius compensation, looking in the direction of travel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -427,6 +440,12 @@ pub enum OpKind {
     RadiusComp {
         /// Side.
         side: CompSide,
+    },
+    /// How radius compensation treats the corner at the end of the next contour element
+    /// (M97 / M98 in that element's block); without compensation it changes nothing.
+    CornerRule {
+        /// The rule.
+        rule: CornerRule,
     },
     /// Path tolerance for blending; `None` returns to the machine default.
     Tolerance {

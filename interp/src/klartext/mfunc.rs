@@ -9,15 +9,16 @@
 //! presets or datum shifts, so both leave the coordinates as programmed. M126 makes absolute
 //! rotary moves take the shorter way (less than 180°), M127 switches that off again. M140
 //! retracts along the tool axis after the block's motion: `MB d` by d (rapid), `MB MAX` to the
-//! travel limit when the interpreter knows it. M97 and M98 (small contour steps, open contour
-//! corners) are accepted as hints for the compensation stage and change nothing here; M6 is
+//! travel limit when the interpreter knows it. M97 (small contour steps) and M98 (open contour
+//! corner) act on the corner at the end of their own block: they are passed on before the
+//! block's motion as [`OpKind::CornerRule`] for the radius compensation stage; M6 is
 //! accepted and does nothing (TOOL CALL changes the tool). Any other M number is reported as
 //! not supported on this machine.
 
 use super::exec::{ExecError, Flow, Machine, at};
 use super::parser::Words;
 use crate::diag::ProgramError;
-use crate::op::{Feed, OpKind, SpindleDir};
+use crate::op::{CornerRule, Feed, OpKind, SpindleDir};
 
 /// The M words of one block, sorted by when they act.
 #[derive(Debug, Default)]
@@ -32,6 +33,7 @@ pub(super) struct MWords {
     retract: bool,
     retract_pos: u32,
     shortest: Option<bool>,
+    corner: Option<CornerRule>,
 }
 
 impl MWords {
@@ -55,7 +57,9 @@ impl MWords {
                     m.spindle_on = Some(SpindleDir::Ccw);
                     m.coolant_on = true;
                 }
-                6 | 91 | 92 | 97 | 98 => {}
+                97 => m.corner = Some(CornerRule::Intersect),
+                98 => m.corner = Some(CornerRule::Open),
+                6 | 91 | 92 => {}
                 126 | 127 => m.shortest = Some(num == 126),
                 140 => {
                     m.retract = true;
@@ -76,6 +80,9 @@ impl MWords {
 
     /// Ops acting at block start.
     pub(super) fn before(&self, mc: &mut Machine, emit: &mut impl FnMut(OpKind)) {
+        if let Some(rule) = self.corner {
+            emit(OpKind::CornerRule { rule });
+        }
         if let Some(dir) = self.spindle_on {
             mc.spindle = dir;
             emit(mc.spindle_op());

@@ -11,9 +11,21 @@
 //!   their intersection; the first element ends there and the second starts there. The tool
 //!   radius that fits is therefore limited by the contour: when the curves do not meet, or
 //!   when cutting would make an element run backwards, that is a contour violation.
+//! - M97 in the block that ends at an outside corner between two straight elements: no
+//!   transition arc; both offset lines are extended to their intersection, as at an inside
+//!   corner. A step smaller than the tool radius can then be passed without damaging the
+//!   contour (the step itself is left partly uncut). Parallel lines (a reversal) and corners
+//!   with an arc keep the transition arc.
+//! - M98 in the block that ends at an inside corner: the offsets are not cut at their
+//!   intersection. The tool runs to the full offset end of the first element (on the normal
+//!   at the corner), goes straight to the full offset start of the second, and goes on from
+//!   there, so that an open corner is machined completely. The two elements' paths may come
+//!   closer to each other's contour than the tool radius; that is what M98 asks for, so the
+//!   gouge check between the two is waived.
 
-use super::element::{CornerArc, Pending};
+use super::element::{CornerArc, Curve, Pending};
 use super::error::CompError;
+use klar_interp::CornerRule;
 use std::f64::consts::PI;
 
 /// Offset end points closer than this (mm) join without a corner.
@@ -47,6 +59,21 @@ pub fn join(a: &mut Pending, b: &mut Pending, d: f64, tool: f64) -> Result<(), C
         theta = -d.signum() * PI;
     }
     let corner = b.elem.start();
+    if theta * d < 0.0
+        && a.end_rule == Some(CornerRule::Intersect)
+        && let (Curve::Line { .. }, Curve::Line { .. }) = (a.curve, b.curve)
+        && let Some(x) = a.curve.intersect(&b.curve).first().copied()
+    {
+        a.trim1 = a.curve.trim_end_to(x);
+        b.trim0 = b.curve.trim_start_to(x);
+        return Ok(());
+    }
+    if theta * d > 0.0 && a.end_rule == Some(CornerRule::Open) {
+        a.bridge = Some(pb);
+        a.open_to.push(b.elem.loc);
+        b.open_to.push(a.elem.loc);
+        return Ok(());
+    }
     if theta * d < 0.0 {
         a.corner = Some(CornerArc {
             center: corner,

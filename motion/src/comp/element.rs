@@ -11,7 +11,7 @@
 
 use super::error::CompError;
 use super::plane::{V2, project, with_point, wrap};
-use klar_interp::{Feed, Op, OpKind, Plane, Pose, SourceLoc};
+use klar_interp::{CornerRule, Feed, Op, OpKind, Plane, Pose, SourceLoc};
 
 /// In-plane moves shorter than this (mm) count as no movement in the plane.
 pub const PLANE_EPS: f64 = 1e-9;
@@ -401,6 +401,14 @@ pub struct Pending {
     pub corner: Option<CornerArc>,
     /// Ops and off-plane moves after this element.
     pub trail: Vec<Trail>,
+    /// The corner rule of this element's block (M97/M98) for the corner at its end.
+    pub end_rule: Option<CornerRule>,
+    /// M98: a straight move after this element to the untrimmed offset start of the next.
+    pub bridge: Option<V2>,
+    /// M98 neighbours (the next block after this element, or the block before it) whose
+    /// programmed contour this element's path may come closer to than the tool radius:
+    /// the corner between them is open.
+    pub open_to: Vec<SourceLoc>,
 }
 
 impl Pending {
@@ -417,6 +425,9 @@ impl Pending {
             lead_end: None,
             corner: None,
             trail: Vec::new(),
+            end_rule: None,
+            bridge: None,
+            open_to: Vec::new(),
         })
     }
 
@@ -470,6 +481,11 @@ impl Pending {
         }
         for t in &self.trail {
             pos = t.emit(pos, plane, out);
+        }
+        if let Some(b) = self.bridge {
+            let target = with_point(&pos, plane, b);
+            out.push(line(pos, target, feed, loc));
+            pos = target;
         }
         if let Some(corner) = self.corner {
             let target = with_point(&pos, plane, corner.to);

@@ -28,7 +28,10 @@
 //!   Moves of the tool axis alone inside a compensated contour are made where the tool
 //!   stands at that corner.
 //!
-//! Not handled here: paraxial R+/R− and M97/M98, which no op carries yet.
+//! - [`OpKind::CornerRule`] (M97/M98 in a block) applies to the corner at the end of the
+//!   next contour element (module `corner` has the rules); it is consumed here.
+//!
+//! Not handled here: paraxial R+/R−, which the interpreter resolves.
 //!
 //! Streaming: an element's tool path is known once the next element is in (its end corner
 //! depends on it). Finished elements are then held back for [`DEFAULT_LOOKAHEAD`] further
@@ -48,7 +51,7 @@ pub use error::{Blocks, CompError};
 
 use approach::{Approach, Depart};
 use element::{Element, Motion, Pending, Shape, Trail, line};
-use klar_interp::{CompSide, Op, OpKind, Plane, Pose, SourceLoc};
+use klar_interp::{CompSide, CornerRule, Op, OpKind, Plane, Pose, SourceLoc};
 use plane::{project, with_point};
 use std::collections::VecDeque;
 
@@ -102,6 +105,8 @@ pub struct Compensator {
     lookahead: usize,
     finished: bool,
     failed: bool,
+    /// The corner rule for the end of the next contour element.
+    rule: Option<CornerRule>,
 }
 
 impl Compensator {
@@ -127,6 +132,7 @@ impl Compensator {
             lookahead: elements,
             finished: false,
             failed: false,
+            rule: None,
         }
     }
 
@@ -204,6 +210,10 @@ impl Compensator {
         let loc = op.loc;
         match &op.kind {
             OpKind::RadiusComp { side } => self.switch(*side, op),
+            OpKind::CornerRule { rule } => {
+                self.rule = Some(*rule);
+                Ok(())
+            }
             OpKind::ToolChange { axis, radius, .. } => {
                 if matches!(self.state, State::Active(_)) || self.approach.is_some() {
                     return Err(CompError::ToolChangeWhileCompensating { loc });
@@ -324,6 +334,7 @@ impl Compensator {
     /// A motion op that is a line or an arc.
     fn motion(&mut self, op: Op) -> Result<(), CompError> {
         let loc = op.loc;
+        let rule = self.rule.take();
         match self.state {
             State::Off => {
                 if let OpKind::Line { to, feed, .. } = op.kind {
@@ -367,7 +378,8 @@ impl Compensator {
                 };
                 let d = Self::side_sign(side) * self.tool;
                 if let Some((appr, trail)) = self.approach.take() {
-                    let p = Pending::new(elem, d, self.tool, false)?;
+                    let mut p = Pending::new(elem, d, self.tool, false)?;
+                    p.end_rule = rule;
                     let pa = p.curve.point_from_start(0.0);
                     let mut ops = approach::approach(&appr, &p.elem, pa, self.pos, self.plane)?;
                     if let Some(end) = ops.last().and_then(end_of) {
@@ -395,7 +407,7 @@ impl Compensator {
             State::Active(side) => {
                 let d = Self::side_sign(side) * self.tool;
                 match Element::classify(&op, self.plane)? {
-                    Some(Motion::Contour(elem)) => self.next_element(elem, d),
+                    Some(Motion::Contour(elem)) => self.next_element(elem, d, rule),
                     Some(Motion::OffPlane { to, feed }) => {
                         self.route(Trail::OffPlane { to, feed, loc });
                         Ok(())
@@ -407,8 +419,14 @@ impl Compensator {
     }
 
     /// Joins a new contour element to the pending one; the pending one is then complete.
-    fn next_element(&mut self, elem: Element, d: f64) -> Result<(), CompError> {
+    fn next_element(
+        &mut self,
+        elem: Element,
+        d: f64,
+        rule: Option<CornerRule>,
+    ) -> Result<(), CompError> {
         let mut b = Pending::new(elem, d, self.tool, false)?;
+        b.end_rule = rule;
         let a = self.pending.take();
         if let Some(mut a) = a {
             let gap = project(&a.elem.to, self.plane).dist(b.elem.start());
@@ -564,6 +582,9 @@ impl Compensator {
             _ => Vec::new(),
         };
         for (loc, shape) in &self.recent {
+            if p.open_to.contains(loc) {
+                continue;
+            }
             let own = *shape == p.elem.shape && *loc == p.elem.loc;
             let checked = if own { &corner_path } else { &path };
             if let Some(distance) = gouge::intrusion(checked, shape, self.tool) {

@@ -339,7 +339,7 @@ impl Planner {
                 });
                 return Ok(());
             }
-            OpKind::Coolant { .. } | OpKind::RadiusComp { .. } => {
+            OpKind::Coolant { .. } | OpKind::RadiusComp { .. } | OpKind::CornerRule { .. } => {
                 self.add_event(op);
                 return Ok(());
             }
