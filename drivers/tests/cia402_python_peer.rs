@@ -369,3 +369,71 @@ fn master_runs_a_program_against_the_python_canopen_peer() {
         (held[1] * COUNTS).round() as i64
     );
 }
+
+#[test]
+fn csv_axes_follow_a_program_against_the_python_canopen_peer() {
+    // The peer moves by exactly target velocity × period per SYNC: the position loop is
+    // klar's alone, and with the feed-forward exact it holds the path to a count.
+    let (peer, bus, report_path) = start_peer(&["--max-step", "100"]);
+    let mut cfg = config();
+    for d in &mut cfg.drives {
+        d.mode = klar_drivers::cia402::AxisMode::Csv;
+        d.homing = None;
+    }
+    let mut backend = Cia402Backend::with_bus(&cfg, PERIOD, Box::new(bus)).expect("master starts");
+    backend.enable().expect("drives enable");
+    let mut fb = vec![AxisFeedback::default(); 2];
+    let start = Instant::now();
+    let mut t = 0.0;
+    // From where the drives stand (0, 0) to the program's start, then the program.
+    let mut points = vec![[0.0, 0.0]];
+    points.extend(program());
+    let path = samples(&points, 20.0);
+    let held = *path.last().expect("samples");
+    let mut worst: f64 = 0.0;
+    for p in path.iter().chain(std::iter::repeat_n(&held, 20)) {
+        t += PERIOD;
+        let due = start + Duration::from_secs_f64(t);
+        if let Some(wait) = due.checked_duration_since(Instant::now()) {
+            std::thread::sleep(wait);
+        }
+        let sps = p.map(|x| Setpoint {
+            position: x,
+            ..Default::default()
+        });
+        backend.cycle(t, &sps, &mut fb).expect("cycle");
+        for f in &fb {
+            assert_eq!(f.state, AxisState::Enabled, "{:?}", backend.stop_report());
+            worst = worst.max(f.following_error.abs());
+        }
+    }
+    // Each cycle the peer rounds to a whole count (carrying the fraction): within a count.
+    assert!(
+        worst <= 1.0 / COUNTS + 1e-12,
+        "worst following error {worst}"
+    );
+    backend.disable().expect("disables");
+    backend
+        .with_master(|m| m.nmt(NmtCommand::Stop, 0))
+        .expect("NMT stop");
+    let (code, report) = finish_peer(peer, &report_path);
+    assert_eq!(report["violations"], serde_json::json!([]));
+    assert_eq!(code, Some(0), "peer exit code");
+    for (node, end) in [("1", held[0]), ("2", held[1])] {
+        let n = &report["nodes"][node];
+        assert_eq!(
+            n["pdos"]["rpdo1"]["entries"],
+            serde_json::json!([0x6040_0010u32, 0x60FF_0020u32])
+        );
+        assert_eq!(
+            n["pdos"]["tpdo1"]["entries"],
+            serde_json::json!([0x6041_0010u32, 0x6064_0020u32])
+        );
+        assert!(n["csv_syncs"].as_u64().expect("csv syncs") >= path.len() as u64);
+        let position = n["position"].as_i64().expect("position");
+        assert!(
+            (position - (end * COUNTS).round() as i64).abs() <= 1,
+            "node {node} ended at {position}"
+        );
+    }
+}

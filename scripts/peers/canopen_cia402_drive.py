@@ -4,7 +4,9 @@
 An independent peer for klar's CANopen master: SDO server, NMT and heartbeat come from
 `canopen`; the PDO handling and the CiA 402 power state machine are written here from the
 CiA 301 / CiA 402 definitions. Each drive follows its CSP target exactly (a perfect servo),
-so the master must read back exactly what it commanded.
+so the master must read back exactly what it commanded. In cyclic synchronous velocity
+(mode 9) it moves by exactly target velocity x interpolation period each SYNC (a perfect
+velocity servo, fractions of a count carried over), so the position loop is the master's.
 
 The peer checks the master while it runs and writes a JSON report at the end:
 - PDO mappings may only change while the PDO is disabled and its count is 0 (else abort);
@@ -12,6 +14,8 @@ The peer checks the master while it runs and writes a JSON report at the end:
 - every controlword must be a transition the current state allows, or keep the state;
 - the CSP target must not move while the drive is not enabled, nor jump more than
   --max-step counts between SYNCs;
+- the CSV target velocity must be 0 while the drive is not enabled, and must not move it
+  more than --max-step counts in one SYNC;
 - after the injected fault, the other drives must get a quick stop within 3 SYNCs.
 
 It prints READY once listening, and ends when the master sends NMT stop to all nodes
@@ -126,6 +130,7 @@ def build_dictionary():
     add(0x6065, "following error window", od.UNSIGNED32, "rw", 0xFFFFFFFF)
     add(0x607A, "target position", od.INTEGER32, "rw", 0, True)
     add(0x607C, "home offset", od.INTEGER32, "rw", 0)
+    add(0x60FF, "target velocity", od.INTEGER32, "rw", 0, True)
     add(0x6098, "homing method", od.INTEGER8, "rw", 0)
     record(0x6099, "homing speeds", {
         0: ("count", od.UNSIGNED8, "ro", 2),
@@ -144,7 +149,7 @@ def build_dictionary():
 FORMATS = {8: "<B", 16: "<H", 32: "<I"}
 DEVICE_NAME = "canopen peer CiA 402 drive"
 
-SIGNED = {0x6060, 0x6061, 0x6064, 0x607A, 0x607C, 0x6098}
+SIGNED = {0x6060, 0x6061, 0x6064, 0x607A, 0x607C, 0x6098, 0x60FF}
 
 
 class Drive:
@@ -157,11 +162,13 @@ class Drive:
         self.state = SO_DISABLED
         self.last_cw = 0
         self.position = 0
+        self.fraction = 0.0
         self.last_target = None
         self.syncs_enabled = 0
         self.homed = False
         self.report = {"states": [SO_DISABLED], "boot_ups": 0, "nmt": [], "syncs": 0,
-                       "quick_stop_at_sync": None, "fault_resets": 0, "homed": False}
+                       "quick_stop_at_sync": None, "fault_resets": 0, "homed": False,
+                       "csv_syncs": 0}
 
     def violation(self, text):
         self.peer.violation("node %d: %s" % (self.id, text))
@@ -187,6 +194,10 @@ class Drive:
         if comm not in self.node.data_store or 1 not in self.node.data_store[comm]:
             value += self.id
         return value
+
+    def period(self):
+        """The interpolation period (0x60C2) in seconds."""
+        return self.u(0x60C2, 1) * 10.0 ** self.s(0x60C2, 2)
 
     def on_sdo_read(self, index, subindex, od):
         """The mode display follows the mode of operation at once."""
@@ -305,7 +316,17 @@ class Drive:
                 self.report["homed"] = True
             else:
                 self.violation("homing method %d not emulated" % self.s(0x6098))
-        elif not enabled and target != self.position and self.state != FAULT:
+        elif enabled and mode == 9:
+            exact = self.s(0x60FF) * self.period() + self.fraction
+            step = int(round(exact))
+            self.fraction = exact - step
+            if abs(step) > self.peer.max_step:
+                self.violation("CSV target velocity %d moves %d counts in one SYNC" % (self.s(0x60FF), step))
+            self.position += step
+            self.report["csv_syncs"] += 1
+        elif not enabled and mode == 9 and self.s(0x60FF) != 0 and self.state != FAULT:
+            self.violation("target velocity %d while %s" % (self.s(0x60FF), self.state))
+        elif not enabled and mode != 9 and target != self.position and self.state != FAULT:
             self.violation("target %d differs from position %d while %s" % (target, self.position, self.state))
         # The next CSP step is measured from the target if following, else from the
         # position (after homing or re-enabling, the drive starts where it stands).
@@ -317,6 +338,8 @@ class Drive:
             sw |= 0x0010
         if enabled and mode == 8:
             sw |= 0x1000 | 0x0400
+        if enabled and mode == 9:
+            sw |= 0x1000
         if enabled and mode == 6 and self.homed:
             sw |= 0x1000 | 0x0400
         self.put(0x6041, sw)

@@ -1,6 +1,23 @@
 //! [`Cia402Backend`]: CiA 402 servo drives on one CANopen bus as a
 //! [`klar_motion::AxisBackend`], one machine axis per drive, in cyclic synchronous position
-//! mode, with homing by the drive.
+//! mode (or cyclic synchronous velocity, or profile position), with homing by the drive.
+//!
+//! # Cyclic synchronous velocity
+//! A CSV drive runs only its velocity loop; klar closes the position loop around it. With
+//! the servo period T, the setpoint p(t) for the end of the coming cycle, the position
+//! command p(t − T) of the cycle that just ended and the actual position x reported at its
+//! end, klar sends
+//! ```text
+//! v = (p(t) − p(t − T)) / T  +  K_p · (p(t − T) − x)
+//! ```
+//! The first term is the velocity feed-forward: the mean velocity that moves the axis from
+//! one setpoint to the next within the cycle. The second corrects what is left: if the
+//! drive realises v exactly, the following error after the cycle is (1 − K_p·T) times the
+//! one before, so it decays geometrically and a drive that lags only by a velocity error δv
+//! settles at a following error of about δv / K_p. K_p (`position_gain`, 1/s) comes from the
+//! drive's configuration. The following error (the setpoint minus the actual position after
+//! the cycle, as in CSP) is checked by klar against the configured window, since a drive in
+//! CSV does not know the position command.
 //!
 //! Enable, disable and fault reset run the CiA 402 power state machine through a few
 //! PDO/SYNC exchanges and return when the drives got there (bounded by the configured state
@@ -12,7 +29,7 @@ use klar_motion::{AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError,
 
 use super::config::CanOpenConfig;
 use super::network::{Cia402Error, DriveKind, Homing, Network};
-use super::objects::{MODE_HOMING, MODE_PROFILE_POSITION};
+use super::objects::{MODE_CSV, MODE_HOMING, MODE_PROFILE_POSITION, MODE_PROFILE_VELOCITY};
 use super::setup::open_bus;
 use super::spindle::Cia402Spindle;
 use super::state::*;
@@ -246,6 +263,7 @@ impl Network {
         let mut out_of_range = None;
         let stopped = self.stop.is_some();
         let ramp = self.spindle_ramp_step;
+        let period = self.servo_period;
         for (i, d) in self.drives.iter_mut().enumerate() {
             match d.kind {
                 DriveKind::Axis => {
@@ -260,6 +278,23 @@ impl Network {
                                 d.velocity = sp.velocity;
                                 profile_setpoint(d, c);
                             }
+                            Ok(_) if d.mode == MODE_CSV => {
+                                let v = csv_velocity(d, sp.position, period);
+                                match d.scaling.to_counts(v) {
+                                    Ok(counts) => {
+                                        d.target = counts;
+                                        d.commanded = sp.position;
+                                        d.velocity = sp.velocity;
+                                    }
+                                    Err(e) => {
+                                        d.target = 0;
+                                        out_of_range = Some((
+                                            i,
+                                            format!("node {}: velocity {v}: {e}", d.node),
+                                        ));
+                                    }
+                                }
+                            }
                             Ok(c) => {
                                 d.target = c;
                                 d.commanded = sp.position;
@@ -271,7 +306,7 @@ impl Network {
                             // Without a fresh set-point the drive keeps its last target.
                             d.controlword &= !(CW_NEW_SETPOINT | CW_CHANGE_IMMEDIATELY);
                         }
-                        _ => d.target = d.actual,
+                        _ => d.target = d.hold_target(),
                     }
                 }
                 DriveKind::Spindle if !stopped && d.fault.is_none() => {
@@ -280,13 +315,20 @@ impl Network {
                         d.controlword =
                             step_towards_enabled(d.power()).unwrap_or(CW_ENABLE_OPERATION);
                     }
-                    // `velocity` holds the ramped speed (rpm) on its way to the command.
+                    // `velocity` holds the ramped speed (rpm) on its way to the command; in
+                    // profile velocity the drive ramps, so the command goes out as it is.
                     if d.power() == PowerState::OperationEnabled {
+                        let ramp = if d.mode == MODE_PROFILE_VELOCITY {
+                            f64::INFINITY
+                        } else {
+                            ramp
+                        };
                         let step = (d.commanded - d.velocity).clamp(-ramp, ramp);
                         d.velocity += step;
                     } else {
                         d.velocity = 0.0;
                     }
+                    let before = d.target;
                     d.target = if d.power() == PowerState::OperationEnabled {
                         match d.scaling.to_counts(d.velocity) {
                             Ok(c) => c,
@@ -295,6 +337,11 @@ impl Network {
                                 0
                             }
                         }
+                    } else {
+                        0
+                    };
+                    d.same_target = if d.target == before {
+                        d.same_target.saturating_add(1)
                     } else {
                         0
                     };
@@ -318,6 +365,14 @@ impl Network {
         self.evaluate();
         self.apply_stop();
     }
+}
+
+/// The CSV velocity command (units/s) towards `setpoint` (see the module documentation):
+/// feed-forward from the last position command (`d.commanded`) plus the gain times the
+/// error of the cycle that just ended.
+fn csv_velocity(d: &super::network::Drive, setpoint: f64, period: f64) -> f64 {
+    let actual = d.scaling.to_units(d.actual);
+    (setpoint - d.commanded) / period + d.position_gain * (d.commanded - actual)
 }
 
 /// The profile-position handshake for one cycle: a new target goes out with a rising

@@ -107,10 +107,17 @@ pub struct DriveConfig {
     /// Homing: method and speeds (written to 0x6098, 0x6099, 0x609A, 0x607C).
     #[serde(default)]
     pub homing: Option<HomingConfig>,
-    /// Mode of operation: cyclic synchronous position (the default) or profile position
-    /// for slow auxiliary axes.
+    /// Mode of operation: cyclic synchronous position (the default), cyclic synchronous
+    /// velocity (klar closes the position loop), or profile position for slow auxiliary
+    /// axes. Profile velocity is accepted by the parser only to be refused with a clear
+    /// message: it belongs to a spindle.
     #[serde(default)]
     pub mode: AxisMode,
+    /// Cyclic synchronous velocity: gain of the position loop klar closes, 1/s (velocity
+    /// command per unit of following error). Default [`DEFAULT_POSITION_GAIN`]; must be
+    /// positive and, with the servo period T, satisfy gain·T ≤ [`MAX_GAIN_PERIOD_PRODUCT`].
+    #[serde(default)]
+    pub position_gain: Option<f64>,
     /// Profile position: velocity of the drive's own profile (0x6081), mm/s or degrees/s.
     #[serde(default)]
     pub profile_velocity: Option<f64>,
@@ -136,9 +143,106 @@ pub enum AxisMode {
     /// Profile position: the drive moves to the latest target on its own profile
     /// (velocity and acceleration from the configuration); for slow auxiliary axes.
     Pp,
+    /// Cyclic synchronous velocity: a new target velocity every SYNC; klar closes the
+    /// position loop on the actual position the drive reports.
+    Csv,
+    /// Profile velocity: refused for axes (the drive ramps on its own, so a path cannot be
+    /// held); valid for a spindle ([`SpindleMode::Pv`]).
+    Pv,
 }
 
-/// A CiA 402 drive used as the spindle, in cyclic synchronous velocity mode.
+/// How a spindle drive follows the speed command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum SpindleMode {
+    /// Cyclic synchronous velocity: klar ramps the speed (at `acceleration`) and sends the
+    /// ramped value every SYNC; at speed when the actual speed is inside the window.
+    #[default]
+    Csv,
+    /// Profile velocity: klar sends the commanded speed, the drive ramps to it with its own
+    /// profile acceleration (0x6083/0x6084, from `acceleration`); at speed when the drive
+    /// reports "target reached" (statusword bit 10).
+    Pv,
+}
+
+/// Default gain of the position loop klar closes around a CSV drive, 1/s.
+pub const DEFAULT_POSITION_GAIN: f64 = 50.0;
+
+/// Largest product of position gain (1/s) and servo period (s) accepted for a CSV axis.
+///
+/// Each cycle the error left after the feed-forward shrinks by the factor 1 − gain·T; at 1
+/// it would be cancelled in one cycle (dead-beat), which leaves no margin for the drive's
+/// velocity loop lag, and beyond 2 the loop diverges. Half of dead-beat keeps the
+/// correction smooth.
+pub const MAX_GAIN_PERIOD_PRODUCT: f64 = 0.5;
+
+impl DriveConfig {
+    /// Checks what can be checked without the bus: the mode suits an axis, and the CSV gain
+    /// (if any) is positive, finite and fits `servo_period` (seconds; pass `None` to skip
+    /// that part). The message names the node.
+    pub fn check(&self, servo_period: Option<f64>) -> Result<(), String> {
+        let node = self.node;
+        match self.mode {
+            AxisMode::Pv => {
+                return Err(format!(
+                    "node {node}: mode \"pv\" (profile velocity) cannot drive an axis: the \
+                     drive ramps to a speed on its own, so klar cannot hold a path with it; use \
+                     \"csp\" or \"csv\" (profile velocity is for a spindle: \
+                     spindle drive mode = \"pv\")"
+                ));
+            }
+            AxisMode::Csp | AxisMode::Pp if self.position_gain.is_some() => {
+                return Err(format!(
+                    "node {node}: position_gain applies only to mode = \"csv\" (in {:?} the \
+                     drive closes the position loop)",
+                    self.mode
+                ));
+            }
+            AxisMode::Csp | AxisMode::Pp => return Ok(()),
+            AxisMode::Csv => {}
+        }
+        let gain = self.gain();
+        if !(gain.is_finite() && gain > 0.0) {
+            return Err(format!(
+                "node {node}: position_gain must be a positive number (1/s), got {gain}"
+            ));
+        }
+        if let Some(t) = servo_period
+            && gain * t > MAX_GAIN_PERIOD_PRODUCT
+        {
+            return Err(format!(
+                "node {node}: position_gain {gain} 1/s is too high for a servo period of {t} s \
+                 (at most {} 1/s)",
+                MAX_GAIN_PERIOD_PRODUCT / t
+            ));
+        }
+        Ok(())
+    }
+
+    /// The CSV position-loop gain, 1/s (the configured one or [`DEFAULT_POSITION_GAIN`]).
+    pub fn gain(&self) -> f64 {
+        self.position_gain.unwrap_or(DEFAULT_POSITION_GAIN)
+    }
+}
+
+impl SpindleConfig {
+    /// Checks what can be checked without the bus: in profile velocity mode the drive
+    /// needs a positive, finite acceleration for its own ramp.
+    pub fn check(&self) -> Result<(), String> {
+        let a = self.acceleration;
+        if self.mode == SpindleMode::Pv && !(a.is_finite() && a > 0.0) {
+            return Err(format!(
+                "spindle node {}: mode \"pv\" needs a positive acceleration (rpm/s) for the \
+                 drive's ramp, got {a}",
+                self.node
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// A CiA 402 drive used as the spindle, in cyclic synchronous velocity mode (default) or
+/// profile velocity mode.
 #[derive(Debug, Clone, PartialEq, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpindleConfig {
@@ -149,13 +253,18 @@ pub struct SpindleConfig {
     /// True when positive counts turn the spindle counter-clockwise (M4).
     #[serde(default)]
     pub invert: bool,
-    /// Acceleration of the speed ramp klar sends, rpm per second.
+    /// Mode of operation: `csv` (klar ramps the speed) or `pv` (the drive ramps).
+    #[serde(default)]
+    pub mode: SpindleMode,
+    /// Acceleration of the speed ramp, rpm per second: the ramp klar sends in CSV, the
+    /// drive's profile acceleration and deceleration (0x6083, 0x6084) in PV.
     #[serde(default = "default_spindle_acceleration")]
     pub acceleration: f64,
-    /// At-speed window as a fraction of the commanded speed.
+    /// At-speed window as a fraction of the commanded speed (CSV).
     #[serde(default = "default_at_speed_fraction")]
     pub at_speed_fraction: f64,
-    /// Smallest at-speed window, rpm.
+    /// Smallest at-speed window, rpm; in PV also the drive's velocity window (0x606D)
+    /// behind "target reached".
     #[serde(default = "default_at_speed_min_rpm")]
     pub at_speed_min_rpm: f64,
     /// Receive PDO number used for controlword and target velocity (1..=4).
@@ -228,4 +337,50 @@ fn default_zero_speed() -> f64 {
 }
 fn default_homing_acceleration() -> f64 {
     100.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn drive(extra: &str) -> DriveConfig {
+        toml::from_str(&format!("node = 7\ncounts_per_unit = 1000.0\n{extra}")).expect("parses")
+    }
+
+    #[test]
+    fn csv_gain_defaults_and_range() {
+        let d = drive("mode = \"csv\"\n");
+        assert_eq!(d.gain(), DEFAULT_POSITION_GAIN);
+        assert!(d.check(Some(0.001)).is_ok());
+        // 0.5 / 2 ms = 250 1/s is the largest gain at 2 ms.
+        assert!(
+            drive("mode = \"csv\"\nposition_gain = 250.0\n")
+                .check(Some(0.002))
+                .is_ok()
+        );
+        let e = drive("mode = \"csv\"\nposition_gain = 251.0\n")
+            .check(Some(0.002))
+            .expect_err("too high");
+        assert!(e.contains("node 7") && e.contains("250"), "{e}");
+        for bad in ["0.0", "-1.0", "inf"] {
+            let e = drive(&format!("mode = \"csv\"\nposition_gain = {bad}\n"))
+                .check(None)
+                .expect_err(bad);
+            assert!(e.contains("position_gain"), "{e}");
+        }
+    }
+
+    #[test]
+    fn profile_velocity_is_for_spindles_only() {
+        let e = drive("mode = \"pv\"\n").check(None).expect_err("pv axis");
+        assert!(e.contains("node 7") && e.contains("spindle"), "{e}");
+        let s: SpindleConfig =
+            toml::from_str("node = 5\ncounts_per_rev = 4096.0\nmode = \"pv\"\n").expect("parses");
+        assert_eq!(s.mode, SpindleMode::Pv);
+        assert!(s.check().is_ok());
+        // A CSP axis with a gain is a mistake worth a message; without one it is fine at any
+        // period.
+        assert!(drive("position_gain = 20.0\n").check(None).is_err());
+        assert!(drive("").check(Some(1.0)).is_ok());
+    }
 }

@@ -13,7 +13,9 @@ pub mod spindle;
 pub mod state;
 
 pub use backend::Cia402Backend;
-pub use config::{BusConfig, CanOpenConfig, DriveConfig, HomingConfig, SpindleConfig};
+pub use config::{
+    AxisMode, BusConfig, CanOpenConfig, DriveConfig, HomingConfig, SpindleConfig, SpindleMode,
+};
 pub use network::{Cia402Error, cyclic_traffic};
 pub use spindle::Cia402Spindle;
 pub use state::PowerState;

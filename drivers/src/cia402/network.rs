@@ -5,8 +5,10 @@
 //! Each servo cycle: send every drive's receive PDO (controlword,
 //! target position), send SYNC, collect every drive's transmit PDO (statusword, actual
 //! position). The mode of operation changes rarely (CSP ↔ homing) and goes by SDO, which
-//! keeps both PDOs at 6 bytes: three drives fit a 1 ms period at 1 Mbit/s. A spindle drive
-//! runs in cyclic synchronous velocity mode with target velocity and actual velocity in
+//! keeps both PDOs at 6 bytes: three drives fit a 1 ms period at 1 Mbit/s. An axis in
+//! cyclic synchronous velocity mode sends a target velocity in place of the target position
+//! (klar closes the position loop, see `backend`). A spindle drive runs in cyclic
+//! synchronous velocity or profile velocity mode with target velocity and actual velocity in
 //! place of the positions. A drive's fault, an emergency, heartbeat loss, missing or
 //! malformed PDOs or bus-off stop every drive: drives still enabled get a quick stop, and
 //! the stop report names the node and the cause.
@@ -32,6 +34,12 @@ pub const RPDO_ENTRIES: [PdoEntry; 2] = [
 pub const TPDO_ENTRIES: [PdoEntry; 2] = [
     PdoEntry::new(STATUSWORD, 0, 16),
     PdoEntry::new(POSITION_ACTUAL, 0, 32),
+];
+/// The receive PDO layout klar maps for an axis in cyclic synchronous velocity mode:
+/// controlword, target velocity (its transmit PDO is the CSP one, [`TPDO_ENTRIES`]).
+pub const CSV_RPDO_ENTRIES: [PdoEntry; 2] = [
+    PdoEntry::new(CONTROLWORD, 0, 16),
+    PdoEntry::new(TARGET_VELOCITY, 0, 32),
 ];
 /// The receive PDO layout klar maps for a spindle: controlword, target velocity.
 pub const SPINDLE_RPDO_ENTRIES: [PdoEntry; 2] = [
@@ -62,7 +70,7 @@ pub enum Cia402Error {
 }
 
 /// The cyclic traffic of `drives` drives (axes and spindle) with klar's PDO layout: SYNC
-/// plus one receive and one transmit PDO each (spindle PDOs have the same length).
+/// plus one receive and one transmit PDO each (CSV and spindle PDOs have the same length).
 pub fn cyclic_traffic(drives: usize) -> CyclicTraffic {
     let rx: usize = RPDO_ENTRIES.iter().map(|e| e.bytes()).sum();
     let tx: usize = TPDO_ENTRIES.iter().map(|e| e.bytes()).sum();
@@ -88,11 +96,29 @@ pub(crate) enum Homing {
 /// What a drive serves.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum DriveKind {
-    /// A machine axis in CSP: target and actual are positions (counts).
+    /// A machine axis: the actual value is a position (counts); the target is a position
+    /// (CSP, profile position) or a velocity (CSV, counts/s).
     Axis,
-    /// The spindle in CSV: target and actual are velocities (counts/s); its scaling is
-    /// counts per second per rpm.
+    /// The spindle in CSV or profile velocity: target and actual are velocities
+    /// (counts/s); its scaling is counts per second per rpm.
     Spindle,
+}
+
+/// The receive PDO layout for a drive of `kind` in `mode`.
+pub(crate) fn receive_entries(kind: DriveKind, mode: i8) -> [PdoEntry; 2] {
+    match kind {
+        DriveKind::Axis if mode == MODE_CSV => CSV_RPDO_ENTRIES,
+        DriveKind::Axis => RPDO_ENTRIES,
+        DriveKind::Spindle => SPINDLE_RPDO_ENTRIES,
+    }
+}
+
+/// The transmit PDO layout for a drive of `kind`.
+pub(crate) fn transmit_entries(kind: DriveKind) -> [PdoEntry; 2] {
+    match kind {
+        DriveKind::Axis => TPDO_ENTRIES,
+        DriveKind::Spindle => SPINDLE_TPDO_ENTRIES,
+    }
 }
 
 /// One drive's state as the master sees it.
@@ -100,7 +126,8 @@ pub(crate) enum DriveKind {
 pub(crate) struct Drive {
     pub(crate) kind: DriveKind,
     pub(crate) node: u8,
-    /// The main mode of operation (CSP or profile position for axes, CSV for a spindle).
+    /// The main mode of operation (CSP, CSV or profile position for axes, CSV or profile
+    /// velocity for a spindle).
     pub(crate) mode: i8,
     pub(crate) scaling: Scaling,
     pub(crate) rpdo_cob: u16,
@@ -120,11 +147,32 @@ pub(crate) struct Drive {
     /// True when `fault` only reports that another drive's fault stopped this one.
     pub(crate) secondary: bool,
     pub(crate) last_emcy: Option<Emergency>,
+    /// CSV axis: gain of the position loop klar closes, 1/s.
+    pub(crate) position_gain: f64,
+    /// CSV axis: the following error klar tolerates (the configured window), units.
+    pub(crate) following_window: Option<f64>,
+    /// Spindle: exchanges since the target last changed (a "target reached" bit counts
+    /// only once the drive has seen the target for a full cycle).
+    pub(crate) same_target: u32,
 }
 
 impl Drive {
     pub(crate) fn power(&self) -> PowerState {
         PowerState::from_statusword(self.status)
+    }
+
+    /// True when the receive PDO carries a velocity (CSV axis, any spindle).
+    pub(crate) fn sends_velocity(&self) -> bool {
+        self.kind == DriveKind::Spindle || self.mode == MODE_CSV
+    }
+
+    /// The target that holds the drive where it is: its actual position, or zero velocity.
+    pub(crate) fn hold_target(&self) -> i32 {
+        if self.sends_velocity() {
+            0
+        } else {
+            self.actual
+        }
     }
 }
 
@@ -142,6 +190,8 @@ pub(crate) struct Network {
     pub(crate) spindle_at_speed: (f64, f64),
     /// The spindle's speed ramp per servo cycle, rpm.
     pub(crate) spindle_ramp_step: f64,
+    /// The servo period (SYNC interval), seconds.
+    pub(crate) servo_period: f64,
 }
 
 impl Network {
@@ -240,7 +290,10 @@ impl Network {
             let Some(d) = self.drives.get(i) else {
                 continue;
             };
-            let data = pdo::pack(&RPDO_ENTRIES, &[u32::from(d.controlword), d.target as u32]);
+            let data = pdo::pack(
+                &receive_entries(d.kind, d.mode),
+                &[u32::from(d.controlword), d.target as u32],
+            );
             let frame = CanFrame::fixed(d.rpdo_cob, &data);
             if let Err(e) = self.master.bus_send(&frame) {
                 let node = d.node;
@@ -293,7 +346,7 @@ impl Network {
                         self.stop_all(Some(i), AxisFault::CommunicationLost, cause);
                     }
                 }
-                Some(frame) => match pdo::unpack(&TPDO_ENTRIES, frame.data()) {
+                Some(frame) => match pdo::unpack(&transmit_entries(d.kind), frame.data()) {
                     Some(v) => {
                         if let (Some(d), [status, actual]) = (self.drives.get_mut(i), v.as_slice())
                         {
@@ -345,8 +398,23 @@ impl Network {
                 && d.fault.is_none()
                 && d.kind == DriveKind::Axis
             {
+                let csv_error = (d.mode == MODE_CSV && is_enable_operation(d.controlword))
+                    .then(|| d.commanded - d.scaling.to_units(d.actual))
+                    .filter(|fe| d.following_window.is_some_and(|w| fe.abs() > w));
                 match d.homing {
-                    Homing::Idle if d.status & SW_OMS2 != 0 => {
+                    // In CSV the drive knows no position command: klar watches the error.
+                    Homing::Idle if csv_error.is_some() => {
+                        let fe = csv_error.unwrap_or_default();
+                        raised = Some((
+                            AxisFault::FollowingError(fe),
+                            format!(
+                                "node {node}: following error {fe:.4} beyond the window {:.4}",
+                                d.following_window.unwrap_or_default()
+                            ),
+                        ));
+                    }
+                    // Bit 13 means "following error" in CSP and PP; it is reserved in CSV.
+                    Homing::Idle if d.status & SW_OMS2 != 0 && d.mode != MODE_CSV => {
                         let fe = d.commanded - d.scaling.to_units(d.actual);
                         raised = Some((
                             AxisFault::FollowingError(fe),
@@ -381,7 +449,7 @@ impl Network {
                             d.homing = Homing::Idle;
                             d.homed = true;
                             d.controlword = CW_ENABLE_OPERATION;
-                            d.target = d.actual;
+                            d.target = d.hold_target();
                             d.commanded = d.scaling.to_units(d.actual);
                             tracing::info!(node, position = d.commanded, "homed");
                             finished_homing.push(i);
@@ -457,12 +525,9 @@ impl Network {
             return;
         }
         for d in self.drives.iter_mut() {
-            match d.kind {
-                DriveKind::Axis => {
-                    d.target = d.actual;
-                    d.commanded = d.scaling.to_units(d.actual);
-                }
-                DriveKind::Spindle => d.target = 0,
+            d.target = d.hold_target();
+            if d.kind == DriveKind::Axis {
+                d.commanded = d.scaling.to_units(d.actual);
             }
             match d.power() {
                 PowerState::OperationEnabled | PowerState::QuickStopActive => {
@@ -515,7 +580,7 @@ impl Network {
                     d.controlword = cw;
                 }
                 if d.kind == DriveKind::Axis {
-                    d.target = d.actual;
+                    d.target = d.hold_target();
                 }
             }
             self.exchange();

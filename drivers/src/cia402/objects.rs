@@ -16,13 +16,22 @@ pub const POSITION_ACTUAL: u16 = 0x6064;
 pub const FOLLOWING_ERROR_WINDOW: u16 = 0x6065;
 /// Velocity actual value (i32, counts/s).
 pub const VELOCITY_ACTUAL: u16 = 0x606C;
+/// Velocity window (u32, counts/s): profile velocity "target reached" holds while the
+/// actual velocity stays this close to the target.
+pub const VELOCITY_WINDOW: u16 = 0x606D;
+/// Velocity window time (u16, ms): how long the actual velocity must stay in the window
+/// before "target reached" is set.
+pub const VELOCITY_WINDOW_TIME: u16 = 0x606E;
+/// Velocity threshold (u16, counts/s): below it profile velocity reports "speed = 0"
+/// (statusword bit 12).
+pub const VELOCITY_THRESHOLD: u16 = 0x606F;
 /// Target position (i32, counts).
 pub const TARGET_POSITION: u16 = 0x607A;
 /// Home offset (i32, counts).
 pub const HOME_OFFSET: u16 = 0x607C;
 /// Profile velocity (u32, counts/s) for profile position mode.
 pub const PROFILE_VELOCITY: u16 = 0x6081;
-/// Profile acceleration (u32, counts/s²).
+/// Profile acceleration (u32, counts/s²), for profile position and profile velocity.
 pub const PROFILE_ACCELERATION: u16 = 0x6083;
 /// Profile deceleration (u32, counts/s²).
 pub const PROFILE_DECELERATION: u16 = 0x6084;
@@ -47,6 +56,8 @@ pub const PRODUCER_HEARTBEAT: u16 = 0x1017;
 
 /// Mode of operation: profile position.
 pub const MODE_PROFILE_POSITION: i8 = 1;
+/// Mode of operation: profile velocity.
+pub const MODE_PROFILE_VELOCITY: i8 = 3;
 /// Mode of operation: homing.
 pub const MODE_HOMING: i8 = 6;
 /// Mode of operation: cyclic synchronous position.

@@ -3,7 +3,7 @@
 
 use std::time::Duration;
 
-use super::config::{AxisMode, BusConfig, CanOpenConfig, DriveConfig, SpindleConfig};
+use super::config::{AxisMode, BusConfig, CanOpenConfig, DriveConfig, SpindleConfig, SpindleMode};
 use super::network::*;
 use super::objects::*;
 use super::scaling::Scaling;
@@ -11,7 +11,7 @@ use super::state::*;
 use crate::can::CanBus;
 use crate::canopen::busload;
 use crate::canopen::pdo::{self, PdoConfig, PdoKind, TRANSMIT_EVERY_SYNC};
-use crate::canopen::sdo::{ABORT_NO_OBJECT, ABORT_NO_SUBINDEX};
+use crate::canopen::sdo::{ABORT_NO_OBJECT, ABORT_NO_SUBINDEX, ABORT_VALUE};
 use crate::canopen::{CanOpenError, Master, NmtCommand, NodeEvent};
 
 /// Communication cycle period (u32, µs), CiA 301.
@@ -58,6 +58,12 @@ impl Network {
         }
         if config.drives.is_empty() && config.spindle.is_none() {
             return Err(Cia402Error::Config("no drives".into()));
+        }
+        for d in &config.drives {
+            d.check(Some(servo_period)).map_err(Cia402Error::Config)?;
+        }
+        if let Some(s) = &config.spindle {
+            s.check().map_err(Cia402Error::Config)?;
         }
         let load = busload::check(
             &cyclic_traffic(config.drives.len() + usize::from(config.spindle.is_some())),
@@ -129,6 +135,7 @@ impl Network {
             state_timeout: Duration::from_millis(config.state_timeout_ms),
             heartbeat_timeout,
             stop: None,
+            servo_period,
         };
         // A first exchange reads every drive's state and position.
         backend.exchange();
@@ -140,16 +147,11 @@ impl Network {
             )));
         }
         for d in backend.drives.iter_mut() {
-            match d.kind {
-                DriveKind::Axis => {
-                    d.target = d.actual;
-                    d.commanded = d.scaling.to_units(d.actual);
-                }
-                DriveKind::Spindle => {
-                    d.target = 0;
-                    d.commanded = 0.0;
-                }
-            }
+            d.target = d.hold_target();
+            d.commanded = match d.kind {
+                DriveKind::Axis => d.scaling.to_units(d.actual),
+                DriveKind::Spindle => 0.0,
+            };
         }
         Ok(backend)
     }
@@ -160,9 +162,17 @@ fn new_drive(cfg: &DriveConfig) -> Result<Drive, Cia402Error> {
         .map_err(|e| Cia402Error::Config(format!("node {}: {e}", cfg.node)))?;
     let mode = match cfg.mode {
         AxisMode::Csp => MODE_CSP,
+        AxisMode::Csv => MODE_CSV,
         AxisMode::Pp => MODE_PROFILE_POSITION,
+        AxisMode::Pv => {
+            // `DriveConfig::check` refuses it first; this keeps the match honest.
+            return Err(Cia402Error::Config(format!(
+                "node {}: profile velocity cannot drive an axis",
+                cfg.node
+            )));
+        }
     };
-    make_drive(
+    let mut drive = make_drive(
         DriveKind::Axis,
         mode,
         cfg.node,
@@ -170,16 +180,23 @@ fn new_drive(cfg: &DriveConfig) -> Result<Drive, Cia402Error> {
         cfg.rpdo,
         cfg.tpdo,
         cfg.homing.is_some(),
-    )
+    )?;
+    drive.position_gain = cfg.gain();
+    drive.following_window = cfg.following_error_window.map(f64::abs);
+    Ok(drive)
 }
 
 fn new_spindle(cfg: &SpindleConfig) -> Result<Drive, Cia402Error> {
     // Target and actual velocity are counts per second: counts per revolution / 60 per rpm.
     let scaling = Scaling::new(cfg.counts_per_rev / 60.0, cfg.invert)
         .map_err(|e| Cia402Error::Config(format!("spindle node {}: {e}", cfg.node)))?;
+    let mode = match cfg.mode {
+        SpindleMode::Csv => MODE_CSV,
+        SpindleMode::Pv => MODE_PROFILE_VELOCITY,
+    };
     make_drive(
         DriveKind::Spindle,
-        MODE_CSV,
+        mode,
         cfg.node,
         scaling,
         cfg.rpdo,
@@ -229,7 +246,22 @@ fn make_drive(
         fault: None,
         secondary: false,
         last_emcy: None,
+        position_gain: 0.0,
+        following_window: None,
+        same_target: 0,
     })
+}
+
+/// The CiA 402 name of a mode of operation, for messages.
+fn mode_name(mode: i8) -> &'static str {
+    match mode {
+        MODE_PROFILE_POSITION => "profile position",
+        MODE_PROFILE_VELOCITY => "profile velocity",
+        MODE_HOMING => "homing",
+        MODE_CSP => "cyclic synchronous position",
+        MODE_CSV => "cyclic synchronous velocity",
+        _ => "unknown mode",
+    }
 }
 
 /// Writes an object that a drive may lack; "no such object" aborts are only logged.
@@ -261,15 +293,12 @@ fn configure_drive(
     period: f64,
 ) -> Result<(), Cia402Error> {
     let node = d.node;
-    let (rpdo, tpdo, mode, rx_entries, tx_entries) = match (d.kind, cfg, &bus.spindle) {
-        (DriveKind::Axis, Some(c), _) => (c.rpdo, c.tpdo, d.mode, RPDO_ENTRIES, TPDO_ENTRIES),
-        (DriveKind::Spindle, _, Some(s)) => (
-            s.rpdo,
-            s.tpdo,
-            MODE_CSV,
-            SPINDLE_RPDO_ENTRIES,
-            SPINDLE_TPDO_ENTRIES,
-        ),
+    let mode = d.mode;
+    let rx_entries = receive_entries(d.kind, mode);
+    let tx_entries = transmit_entries(d.kind);
+    let (rpdo, tpdo) = match (d.kind, cfg, &bus.spindle) {
+        (DriveKind::Axis, Some(c), _) => (c.rpdo, c.tpdo),
+        (DriveKind::Spindle, _, Some(s)) => (s.rpdo, s.tpdo),
         _ => {
             return Err(Cia402Error::Config(format!(
                 "node {node}: no configuration"
@@ -286,7 +315,27 @@ fn configure_drive(
     })?;
     master.sdo_write(node, INTERPOLATION_PERIOD, 1, &[value])?;
     master.sdo_write(node, INTERPOLATION_PERIOD, 2, &[index as u8])?;
-    master.sdo_write(node, MODES_OF_OPERATION, 0, &[mode as u8])?;
+    match master.sdo_write(node, MODES_OF_OPERATION, 0, &[mode as u8]) {
+        Err(CanOpenError::SdoAbort { code, .. }) if code == ABORT_VALUE => {
+            return Err(Cia402Error::Config(format!(
+                "node {node}: the drive does not support mode of operation {mode} ({})",
+                mode_name(mode)
+            )));
+        }
+        other => other?,
+    }
+    if d.kind == DriveKind::Spindle
+        && mode == MODE_PROFILE_VELOCITY
+        && let Some(s) = &bus.spindle
+    {
+        // The drive's own ramp: rpm/s through the spindle scaling (counts/s per rpm) gives
+        // counts/s².
+        let accel = d.scaling.magnitude_counts(s.acceleration).to_le_bytes();
+        master.sdo_write(node, PROFILE_ACCELERATION, 0, &accel)?;
+        master.sdo_write(node, PROFILE_DECELERATION, 0, &accel)?;
+        let window = d.scaling.magnitude_counts(s.at_speed_min_rpm).to_le_bytes();
+        write_optional(master, node, VELOCITY_WINDOW, 0, &window)?;
+    }
     if let Some(w) = cfg.and_then(|c| c.following_error_window) {
         master.sdo_write(
             node,

@@ -1,9 +1,15 @@
-//! [`Cia402Spindle`]: a CiA 402 drive in cyclic synchronous velocity mode as the
-//! machine's [`klar_motion::SpindleBackend`], sharing the bus (and the SYNC cycle) with the
-//! axes of its [`super::Cia402Backend`].
+//! [`Cia402Spindle`]: a CiA 402 drive in cyclic synchronous velocity or profile velocity
+//! mode as the machine's [`klar_motion::SpindleBackend`], sharing the bus (and the SYNC
+//! cycle) with the axes of its [`super::Cia402Backend`].
 //!
 //! A non-zero command switches the drive on through the power state machine, one step per
 //! cycle, then sends the speed as target velocity; zero keeps it enabled at standstill.
+//! In CSV klar ramps the target at the configured acceleration and reports "at speed" when
+//! the actual speed is inside the window around the command. In profile velocity the
+//! command goes out unramped, the drive ramps with its own profile acceleration, and "at
+//! speed" is the drive's "target reached" (statusword bit 10), taken only once the drive
+//! has had the current target for a full cycle (so a bit earned by the previous target does
+//! not count).
 
 use std::sync::{Arc, Mutex};
 
@@ -11,7 +17,8 @@ use klar_motion::{BackendError, SpindleBackend, SpindleFeedback};
 
 use super::backend::lock;
 use super::network::{DriveKind, Network};
-use super::state::PowerState;
+use super::objects::MODE_PROFILE_VELOCITY;
+use super::state::{PowerState, SW_TARGET_REACHED};
 
 /// The spindle drive of a CANopen bus.
 pub struct Cia402Spindle {
@@ -66,12 +73,21 @@ impl SpindleBackend for Cia402Spindle {
             .get(index)
             .ok_or_else(|| BackendError::InvalidState("no spindle drive on this bus".into()))?;
         let rpm = d.scaling.to_units(d.actual);
-        let window = (d.commanded.abs() * at_speed_fraction).max(at_speed_min);
+        let enabled = d.power() == PowerState::OperationEnabled;
+        let at_speed = if d.mode == MODE_PROFILE_VELOCITY {
+            let sent = d.scaling.to_counts(d.commanded).ok() == Some(d.target);
+            if d.commanded == 0.0 && !enabled {
+                rpm.abs() <= at_speed_min
+            } else {
+                enabled && sent && d.same_target >= 1 && d.status & SW_TARGET_REACHED != 0
+            }
+        } else {
+            let window = (d.commanded.abs() * at_speed_fraction).max(at_speed_min);
+            (d.commanded == 0.0 || enabled) && (rpm - d.commanded).abs() <= window
+        };
         Ok(SpindleFeedback {
             rpm,
-            at_speed: d.fault.is_none()
-                && (d.commanded == 0.0 || d.power() == PowerState::OperationEnabled)
-                && (rpm - d.commanded).abs() <= window,
+            at_speed: d.fault.is_none() && at_speed,
             fault: d.fault.clone(),
         })
     }

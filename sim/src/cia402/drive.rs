@@ -3,9 +3,29 @@
 //! It answers NMT, SDO (through its [`ObjectDictionary`]), sends boot-up and heartbeats,
 //! processes its receive PDOs and sends its transmit PDOs on SYNC while operational, using
 //! whatever mapping the master configured. On each SYNC it applies the latest controlword,
-//! target position and mode, steps the plant by the interpolation period (0x60C2), and
-//! reports statusword, position and mode. Plant faults and injected faults put it in
-//! Fault and send an emergency.
+//! target and mode, steps the plant by the interpolation period (0x60C2), and reports
+//! statusword, position and mode. Plant faults and injected faults put it in Fault and send
+//! an emergency.
+//!
+//! # Modes
+//! - Cyclic synchronous position (8): the target position is the plant's command.
+//! - Cyclic synchronous velocity (9): the target velocity (0x60FF) is the velocity loop's
+//!   command (fed forward in full). The plant's controller works on positions, so the drive
+//!   integrates the target velocity into its reference; the plant's position gain then acts
+//!   on the integral of the velocity error, like the integral part of a PI velocity loop. A
+//!   plant with `position_gain = 0` is a drive with a plain velocity loop. Statusword bit 12
+//!   says the drive follows the target.
+//! - Profile velocity (3): the drive ramps its velocity demand towards the target velocity
+//!   at the profile acceleration (0x6083) while the speed grows and the profile
+//!   deceleration (0x6084) while it shrinks (half the plant's force-limited acceleration when
+//!   0); the demand drives the plant as in CSV. Bit 10 (target reached): the demand has
+//!   reached the target and the actual velocity has stayed within the velocity window
+//!   (0x606D) of it for the window time (0x606E, ms). Bit 12 (speed): the actual velocity
+//!   is at most the velocity threshold (0x606F).
+//! - Profile position (1) and homing (6): the drive's own profile and homing methods.
+//!
+//! Modes of operation outside the supported set ([`SimCia402Drive::with_modes`]) are
+//! refused with SDO abort 0x0609_0030 (invalid value for parameter).
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
@@ -20,7 +40,9 @@ use klar_drivers::cia402::objects::*;
 use klar_drivers::cia402::state::*;
 use klar_motion::{AxisFault, AxisState, Setpoint};
 
-use super::od::{Access, ObjectDictionary, SdoServer};
+use super::dictionary::drive_dictionary;
+use super::od::{ObjectDictionary, SdoServer};
+use super::profile::{Profile, VelocityRamp};
 use crate::plant::{ServoPlant, SimAxisParams};
 
 /// EMCY code the simulated drive sends for a limit switch (device specific).
@@ -94,13 +116,14 @@ impl SimDriveControl {
     }
 }
 
-/// The state of a profile position move (drive coordinates, units and units/s).
-#[derive(Debug, Clone, Copy, PartialEq)]
-struct Profile {
-    target: f64,
-    position: f64,
-    velocity: f64,
-}
+/// The modes of operation a simulated drive supports unless told otherwise.
+pub const SUPPORTED_MODES: [i8; 5] = [
+    MODE_PROFILE_POSITION,
+    MODE_PROFILE_VELOCITY,
+    MODE_HOMING,
+    MODE_CSP,
+    MODE_CSV,
+];
 
 /// Parameters of a simulated drive.
 #[derive(Debug, Clone, PartialEq)]
@@ -136,6 +159,12 @@ pub struct SimCia402Drive {
     last_setpoint: Option<(f64, f64)>,
     /// Position setpoint integrated from the target velocity in CSV mode.
     csv_position: Option<f64>,
+    /// The velocity ramp in profile velocity mode.
+    ramp: Option<VelocityRamp>,
+    /// Profile velocity: since when (drive time) the actual velocity is inside the window.
+    in_window_since: Option<f64>,
+    /// The modes of operation 0x6060 accepts.
+    modes: Vec<i8>,
     /// The drive's own profile in profile position mode.
     profile: Option<Profile>,
     /// Profile position: the last new set-point is acknowledged (statusword bit 12).
@@ -170,6 +199,9 @@ impl SimCia402Drive {
             target_reached: false,
             last_setpoint: None,
             csv_position: None,
+            ramp: None,
+            in_window_since: None,
+            modes: SUPPORTED_MODES.to_vec(),
             profile: None,
             setpoint_ack: false,
             velocity_filter: (0.0, None),
@@ -177,6 +209,20 @@ impl SimCia402Drive {
         };
         drive.reset_dictionary();
         (drive, control)
+    }
+
+    /// The same drive supporting only `modes` (plus 0, "no mode"): writing another mode of
+    /// operation is refused with SDO abort 0x0609_0030.
+    pub fn with_modes(mut self, modes: &[i8]) -> Self {
+        self.modes = modes.to_vec();
+        self.restrict_modes();
+        self
+    }
+
+    fn restrict_modes(&mut self) {
+        let mut allowed: Vec<u32> = self.modes.iter().map(|&m| u32::from(m as u8)).collect();
+        allowed.push(0);
+        self.od.restrict(MODES_OF_OPERATION, 0, allowed);
     }
 
     /// The node ID.
@@ -189,68 +235,8 @@ impl SimCia402Drive {
     }
 
     fn reset_dictionary(&mut self) {
-        let n = u32::from(self.node);
-        let od = &mut self.od;
-        *od = ObjectDictionary::new();
-        let rw = Access::ReadWrite;
-        let ro = Access::ReadOnly;
-        od.add(0x1000, 0, &0x0002_0192u32.to_le_bytes(), ro, false);
-        od.add(0x1001, 0, &[0], ro, true);
-        od.add(0x1006, 0, &0u32.to_le_bytes(), rw, false);
-        od.add_bytes(0x1008, 0, b"klar simulated CiA 402 drive", ro);
-        od.add(PRODUCER_HEARTBEAT, 0, &0u16.to_le_bytes(), rw, false);
-        for p in 0..4u16 {
-            let rx_cob = (0x200 + 0x100 * u32::from(p) + n) | if p == 0 { 0 } else { COB_INVALID };
-            let tx_cob = (0x180 + 0x100 * u32::from(p) + n) | if p == 0 { 0 } else { COB_INVALID };
-            for (comm, map, cob) in [
-                (0x1400 + p, 0x1600 + p, rx_cob),
-                (0x1800 + p, 0x1A00 + p, tx_cob),
-            ] {
-                od.add(comm, 0, &[2], ro, false);
-                od.add(comm, 1, &cob.to_le_bytes(), rw, false);
-                od.add(comm, 2, &[0xFF], rw, false);
-                od.add(map, 0, &[0], rw, false);
-                for s in 1..=8 {
-                    od.add(map, s, &0u32.to_le_bytes(), rw, false);
-                }
-            }
-        }
-        // Default mapping of PDO 1: controlword / statusword only.
-        od.set(0x1600, 1, 0x6040_0010);
-        od.set(0x1600, 0, 1);
-        od.set(0x1A00, 1, 0x6041_0010);
-        od.set(0x1A00, 0, 1);
-        od.add(ERROR_CODE, 0, &0u16.to_le_bytes(), ro, true);
-        od.add(CONTROLWORD, 0, &0u16.to_le_bytes(), rw, true);
-        od.add(STATUSWORD, 0, &0u16.to_le_bytes(), ro, true);
-        od.add(QUICK_STOP_OPTION, 0, &2i16.to_le_bytes(), rw, false);
-        od.add(MODES_OF_OPERATION, 0, &[0], rw, true);
-        od.add(MODES_DISPLAY, 0, &[0], ro, true);
-        od.add(POSITION_ACTUAL, 0, &0i32.to_le_bytes(), ro, true);
-        od.add(
-            FOLLOWING_ERROR_WINDOW,
-            0,
-            &u32::MAX.to_le_bytes(),
-            rw,
-            false,
-        );
-        od.add(VELOCITY_ACTUAL, 0, &0i32.to_le_bytes(), ro, true);
-        od.add(TARGET_POSITION, 0, &0i32.to_le_bytes(), rw, true);
-        od.add(HOME_OFFSET, 0, &0i32.to_le_bytes(), rw, false);
-        od.add(PROFILE_VELOCITY, 0, &0u32.to_le_bytes(), rw, false);
-        od.add(PROFILE_ACCELERATION, 0, &0u32.to_le_bytes(), rw, false);
-        od.add(PROFILE_DECELERATION, 0, &0u32.to_le_bytes(), rw, false);
-        od.add(QUICK_STOP_DECELERATION, 0, &0u32.to_le_bytes(), rw, false);
-        od.add(HOMING_METHOD, 0, &[35], rw, false);
-        od.add(HOMING_SPEEDS, 0, &[2], ro, false);
-        od.add(HOMING_SPEEDS, 1, &0u32.to_le_bytes(), rw, false);
-        od.add(HOMING_SPEEDS, 2, &0u32.to_le_bytes(), rw, false);
-        od.add(HOMING_ACCELERATION, 0, &0u32.to_le_bytes(), rw, false);
-        od.add(INTERPOLATION_PERIOD, 0, &[2], ro, false);
-        od.add(INTERPOLATION_PERIOD, 1, &[1], rw, false);
-        od.add(INTERPOLATION_PERIOD, 2, &[(-3i8) as u8], rw, false);
-        od.add(FOLLOWING_ERROR_ACTUAL, 0, &0i32.to_le_bytes(), ro, true);
-        od.add(TARGET_VELOCITY, 0, &0i32.to_le_bytes(), rw, true);
+        self.od = drive_dictionary(self.node, self.plant_params.counts_per_unit);
+        self.restrict_modes();
     }
 
     /// The interpolation period from 0x60C2, seconds.
@@ -412,6 +398,10 @@ impl SimCia402Drive {
         if !(enabled && mode == MODE_CSV) {
             self.csv_position = None;
         }
+        if !(enabled && mode == MODE_PROFILE_VELOCITY) {
+            self.ramp = None;
+            self.in_window_since = None;
+        }
         if !(enabled && mode == MODE_PROFILE_POSITION) {
             self.profile = None;
             self.setpoint_ack = false;
@@ -426,6 +416,9 @@ impl SimCia402Drive {
                 let p = self.csv_position.unwrap_or(reported) + v * dt;
                 self.csv_position = Some(p);
                 p
+            }
+            PowerState::OperationEnabled if mode == MODE_PROFILE_VELOCITY => {
+                self.ramp_step(reported, dt)
             }
             PowerState::OperationEnabled if mode == MODE_PROFILE_POSITION => {
                 if cw & CW_NEW_SETPOINT == 0 {
@@ -442,6 +435,7 @@ impl SimCia402Drive {
                     self.setpoint_ack = true;
                 }
                 self.profile_step(&mut profile, dt);
+
                 self.profile = Some(profile);
                 profile.position
             }
@@ -458,7 +452,10 @@ impl SimCia402Drive {
         let (velocity, acceleration) = match self.last_setpoint {
             Some((p, v))
                 if (self.power == PowerState::OperationEnabled
-                    && matches!(mode, MODE_CSP | MODE_CSV | MODE_PROFILE_POSITION))
+                    && matches!(
+                        mode,
+                        MODE_CSP | MODE_CSV | MODE_PROFILE_POSITION | MODE_PROFILE_VELOCITY
+                    ))
                     || self.power == PowerState::QuickStopActive =>
             {
                 let vel = (position - p) / dt;
@@ -531,8 +528,8 @@ impl SimCia402Drive {
         }
     }
 
-    /// One cycle of the profile generator: accelerate towards the profile velocity, and
-    /// brake in time to stop at the target (v ≤ √(2·a·distance)).
+    /// One cycle of the profile position generator with the profile velocity and
+    /// acceleration from the dictionary (the plant's homing speed and acceleration when 0).
     fn profile_step(&self, profile: &mut Profile, dt: f64) {
         let cpu = self.counts_per_unit();
         let v_max = match self.od.u32(PROFILE_VELOCITY, 0) {
@@ -543,20 +540,33 @@ impl SimCia402Drive {
             0 => self.plant_params.homing_acceleration,
             c => f64::from(c) / cpu,
         };
-        let to_go = profile.target - profile.position;
-        let stop_speed = (2.0 * accel * to_go.abs()).sqrt();
-        let wanted = to_go.signum() * v_max.min(stop_speed);
-        let dv = (wanted - profile.velocity).clamp(-accel * dt, accel * dt);
-        let v = profile.velocity + dv;
-        profile.position += 0.5 * (profile.velocity + v) * dt;
-        profile.velocity = v;
-        let remaining = profile.target - profile.position;
-        if remaining.abs() <= 0.5 / cpu && v.abs() <= accel * dt
-            || remaining.signum() != to_go.signum() && to_go != 0.0
-        {
-            profile.position = profile.target;
-            profile.velocity = 0.0;
-        }
+        profile.step(v_max, accel, 1.0 / cpu, dt);
+    }
+
+    /// One cycle of profile velocity: ramps the demand, follows "target reached", and
+    /// returns the position reference for the plant.
+    fn ramp_step(&mut self, reported: f64, dt: f64) -> f64 {
+        let cpu = self.counts_per_unit();
+        let p = &self.plant_params;
+        let fallback = DEFAULT_QUICK_STOP_FRACTION * p.force_limit / (p.mass * p.si_per_unit());
+        let rate = |c: u32| if c == 0 { fallback } else { f64::from(c) / cpu };
+        let accel = rate(self.od.u32(PROFILE_ACCELERATION, 0));
+        let decel = rate(self.od.u32(PROFILE_DECELERATION, 0));
+        let target = f64::from(self.od.u32(TARGET_VELOCITY, 0) as i32) / cpu;
+        let mut ramp = self.ramp.unwrap_or(VelocityRamp {
+            velocity: 0.0,
+            position: reported,
+        });
+        let reached = ramp.step(target, accel, decel, dt);
+        self.ramp = Some(ramp);
+        let window = f64::from(self.od.u32(VELOCITY_WINDOW, 0)) / cpu;
+        let inside = reached && (self.plant.actual_velocity() - target).abs() <= window;
+        self.in_window_since = match (inside, self.in_window_since) {
+            (false, _) => None,
+            (true, None) => Some(self.time),
+            (true, since) => since,
+        };
+        ramp.position
     }
 
     fn quick_stop_step(&mut self, dt: f64) -> f64 {
@@ -597,6 +607,23 @@ impl SimCia402Drive {
             sw |= SW_OMS1;
             if (target_units - reported).abs() <= 1.0 / self.counts_per_unit() {
                 sw |= SW_TARGET_REACHED;
+            }
+        }
+        if in_mode && mode == MODE_CSV {
+            sw |= SW_OMS1;
+        }
+        if in_mode && mode == MODE_PROFILE_VELOCITY {
+            let hold = f64::from(self.od.u32(VELOCITY_WINDOW_TIME, 0) as u16) / 1000.0;
+            if self
+                .in_window_since
+                .is_some_and(|since| self.time - since + 1e-9 >= hold)
+            {
+                sw |= SW_TARGET_REACHED;
+            }
+            let threshold =
+                f64::from(self.od.u32(VELOCITY_THRESHOLD, 0) as u16) / self.counts_per_unit();
+            if self.plant.actual_velocity().abs() <= threshold {
+                sw |= SW_OMS1;
             }
         }
         if in_mode && mode == MODE_PROFILE_POSITION {

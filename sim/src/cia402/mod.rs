@@ -2,8 +2,10 @@
 //! plant as the simulated axis, and helpers that put simulated drives on an in-memory bus
 //! ([`simulated_backend`]) or behind an slcan pseudo-terminal ([`serve_on_slcan`]).
 
+mod dictionary;
 pub mod drive;
 pub mod od;
+mod profile;
 
 pub use drive::{Injection, SimCia402Drive, SimDriveConfig, SimDriveControl};
 

@@ -1,6 +1,6 @@
 //! The simulated drive's object dictionary and its SDO server (expedited and segmented
-//! transfers, CiA 301 abort codes for unknown objects, read-only entries, wrong lengths and
-//! PDO mappings changed while the PDO is valid).
+//! transfers, CiA 301 abort codes for unknown objects, read-only entries, wrong lengths,
+//! values outside an entry's allowed set and PDO mappings changed while the PDO is valid).
 
 use std::collections::BTreeMap;
 
@@ -36,6 +36,8 @@ pub struct Entry {
 #[derive(Debug, Clone, Default)]
 pub struct ObjectDictionary {
     entries: BTreeMap<(u16, u8), Entry>,
+    /// Entries that accept only some values over SDO (compared as unsigned numbers).
+    allowed: BTreeMap<(u16, u8), Vec<u32>>,
 }
 
 impl ObjectDictionary {
@@ -68,6 +70,12 @@ impl ObjectDictionary {
                 mappable: false,
             },
         );
+    }
+
+    /// Limits what an SDO write may put into `index`/`sub` to `values` (as unsigned
+    /// numbers of the entry's width); other values are refused with abort 0x0609_0030.
+    pub fn restrict(&mut self, index: u16, sub: u8, values: Vec<u32>) {
+        self.allowed.insert((index, sub), values);
     }
 
     /// The entry at `index`/`sub`.
@@ -117,6 +125,15 @@ impl ObjectDictionary {
         }
         if entry.fixed_len && entry.value.len() != data.len() {
             return Err(ABORT_LENGTH);
+        }
+        if let Some(values) = self.allowed.get(&(index, sub)) {
+            let mut b = [0u8; 4];
+            for (dst, src) in b.iter_mut().zip(data) {
+                *dst = *src;
+            }
+            if !values.contains(&u32::from_le_bytes(b)) {
+                return Err(ABORT_VALUE);
+            }
         }
         self.check_pdo_rules(index, sub, data)?;
         if let Some(e) = self.entries.get_mut(&(index, sub)) {
