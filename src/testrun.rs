@@ -85,10 +85,11 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
         ..TestRunReport::default()
     };
     let first_error_line = report.errors.first().map(|d| d.line);
-    let Ok(interp) = config.open_program(path, start) else {
+    let Ok(mut interp) = config.open_program(path, start) else {
         // `check` has already reported why the file cannot be opened.
         return report;
     };
+    interp.set_dry_run(true);
     let mut machine = MachineChecks::new(path, config, start);
     let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
     // The same stream a run plans from: the compensated tool-centre path, feeds resolved.

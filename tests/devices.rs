@@ -75,8 +75,15 @@ fn a_program_runs_on_cia402_drives_over_the_in_memory_bus_and_over_slcan() {
             .zip(&b)
             .map(|(p, q)| (p - q).abs())
             .fold(0.0, f64::max);
-        let differ = a.iter().zip(&b).filter(|(p, q)| (*p - *q).abs() > 1e-4).count();
-        eprintln!("{col}: {differ} of {} rows differ, worst {worst:.5} mm", a.len());
+        let differ = a
+            .iter()
+            .zip(&b)
+            .filter(|(p, q)| (*p - *q).abs() > 1e-4)
+            .count();
+        eprintln!(
+            "{col}: {differ} of {} rows differ, worst {worst:.5} mm",
+            a.len()
+        );
         assert!(
             worst <= 0.1,
             "{col}: memory and slcan runs differ by {worst}"

@@ -176,7 +176,38 @@ pub enum ProgramError {
     /// A motion at feed with no feed programmed.
     #[error("no feed rate programmed: add F to this or an earlier block")]
     NoFeed,
+    /// FN 16 output or a table (FN 26–28) that cannot be read or written.
+    #[error("{0}")]
+    FileData(String),
     /// Arithmetic failure in a Q parameter computation.
     #[error("{0}")]
     Arithmetic(String),
+    /// A machining cycle cannot be generated (unknown number, parameter errors).
+    #[error("{0}")]
+    Cycle(crate::cycles::CycleError),
+    /// A cycle call without a defined machining cycle.
+    #[error("{0} without a defined machining cycle: program CYCL DEF first")]
+    NoCycle(&'static str),
+    /// A datum or preset table row that is not there (or no table at all).
+    #[error("{table} table has no row {row}")]
+    NoDatumRow {
+        /// `datum` or `preset`.
+        table: &'static str,
+        /// The row asked for.
+        row: f64,
+    },
+    /// An error inside a contour subprogram of an SL cycle.
+    #[error("contour {label} (line {line}): {error}")]
+    Contour {
+        /// The contour's label.
+        label: String,
+        /// Line of the block with the error.
+        line: u32,
+        /// What is wrong.
+        error: Box<ProgramError>,
+    },
+    /// A coordinate transform that cannot be applied (mirrored tool axis, arc that would
+    /// become an ellipse, …).
+    #[error("{0}")]
+    Transform(String),
 }

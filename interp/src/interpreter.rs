@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use crate::diag::{Diagnostic, ProgramError};
 use crate::dialect::{Dialect, DialectRun, detect_dialect, runner};
+use crate::klartext::cycle_table::DatumTable;
 use crate::klartext::exec::{Blank, Flow, LabelKey, Machine};
 use crate::klartext::parser::{LabelRef, Parser, Stmt};
 use crate::klartext::tools::ToolTable;
@@ -205,11 +206,19 @@ impl Interpreter {
         let (dialect, input) = open_any(path)?;
         tracing::debug!(file = %path.display(), dialect = dialect.name(), "opened program");
         if dialect == Dialect::Klartext {
-            return Ok(Self::with_input(path.to_path_buf(), input, start));
+            let mut it = Self::with_input(path.to_path_buf(), input, start);
+            it.machine.set_program_file(path);
+            return Ok(it);
         }
         let mut it = Self::with_input(path.to_path_buf(), Box::new(Cursor::new(Vec::new())), start);
         it.other = runner(dialect, path.to_path_buf(), input, start);
         Ok(it)
+    }
+
+    /// A dry run (the test run): files are read but none is written (FN 16 output and FN 27
+    /// table writes are kept in memory).
+    pub fn set_dry_run(&mut self, on: bool) {
+        self.machine.set_dry_run(on);
     }
 
     /// Interprets a program held in memory (tests, benches); `name` is used in diagnostics and
@@ -220,7 +229,9 @@ impl Interpreter {
         let input = Box::new(Cursor::new(text.as_bytes().to_vec()));
         let dialect = detect_dialect(Path::new(name), text.as_bytes()).unwrap_or(Dialect::Klartext);
         if dialect == Dialect::Klartext {
-            return Self::with_input(PathBuf::from(name), input, start);
+            let mut it = Self::with_input(PathBuf::from(name), input, start);
+            it.machine.set_program_file(Path::new(name));
+            return it;
         }
         let mut it = Self::with_input(
             PathBuf::from(name),
@@ -254,6 +265,18 @@ impl Interpreter {
     /// and the call's DL/DR), and calling a tool missing from a non-empty table is an error.
     pub fn with_tools(mut self, tools: ToolTable) -> Self {
         self.machine.set_tools(tools);
+        self
+    }
+
+    /// Uses `table` for datum shifts from a datum table (`CYCL DEF 7.1 #n`).
+    pub fn with_datum_table(mut self, table: DatumTable) -> Self {
+        self.machine.set_datum_table(table);
+        self
+    }
+
+    /// Uses `table` for presets activated by cycle 247 (`Q339` = row number).
+    pub fn with_preset_table(mut self, table: DatumTable) -> Self {
+        self.machine.set_preset_table(table);
         self
     }
 
@@ -440,7 +463,92 @@ impl Interpreter {
                 self.jump(&label, mode)
             }
             Flow::CallPgm(written) => self.call_program(&written),
+            Flow::Contours(labels) => {
+                let collected = self.collect_contours(&labels);
+                self.machine.finish_contours(collected, &mut self.queue)
+            }
         }
+    }
+
+    /// SL cycles: runs the contour subprograms of cycle 14 with the machine collecting their
+    /// lines and arcs instead of emitting them, then returns to the calling block.
+    fn collect_contours(&mut self, labels: &[LabelKey]) -> Result<(), ProgramError> {
+        let Some(resume) = self.units.last().map(|u| u.reader.next_start()) else {
+            return Ok(());
+        };
+        self.machine.begin_contours();
+        let mut result = Ok(());
+        for key in labels {
+            result = self.collect_contour(key);
+            if result.is_err() {
+                break;
+            }
+        }
+        if let Some(u) = self.units.last_mut() {
+            u.reader
+                .seek(resume)
+                .map_err(|e| ProgramError::Io(e.to_string()))?;
+        }
+        result
+    }
+
+    /// Runs one contour subprogram (from its LBL to LBL 0) into the machine's collector.
+    fn collect_contour(&mut self, key: &LabelKey) -> Result<(), ProgramError> {
+        let start = self.find_label(key)?;
+        let io = |e: std::io::Error| ProgramError::Io(e.to_string());
+        let mut scratch = VecDeque::new();
+        let Some(u) = self.units.last_mut() else {
+            return Ok(());
+        };
+        u.reader.seek(start).map_err(io)?;
+        let wrap = |line: u32, e: ProgramError| ProgramError::Contour {
+            label: key.to_string(),
+            line,
+            error: Box::new(e),
+        };
+        loop {
+            let Some(u) = self.units.last_mut() else {
+                return Ok(());
+            };
+            let Some(s) = u.reader.next_block().map_err(io)? else {
+                return Err(wrap(start.line, ProgramError::Missing("LBL 0 missing")));
+            };
+            let block = self
+                .parser
+                .parse(u.reader.text())
+                .map_err(|e| wrap(s.line, e.error))?;
+            match block.stmt {
+                Stmt::Label(LabelRef::Num(0)) | Stmt::EndPgm => break,
+                Stmt::Empty | Stmt::Label(_) => continue,
+                _ => {}
+            }
+            let (line, col) = u.reader.position(block.start);
+            let loc = SourceLoc {
+                file: u.file_id,
+                line,
+                col,
+                block: block.number,
+            };
+            let flow = self
+                .machine
+                .exec(
+                    &block.stmt,
+                    &self.parser,
+                    u.reader.text(),
+                    loc,
+                    &mut scratch,
+                )
+                .map_err(|(_, e)| wrap(line, e))?;
+            if flow != Flow::Continue {
+                return Err(wrap(
+                    line,
+                    ProgramError::Missing("no jumps, calls or program end in a contour subprogram"),
+                ));
+            }
+        }
+        self.machine
+            .end_contour(&key.to_string(), &mut scratch)
+            .map_err(|e| wrap(start.line, e))
     }
 
     /// CALL PGM: opens the called file and runs it until its END PGM.
@@ -478,6 +586,7 @@ impl Interpreter {
             .map_err(|_| ProgramError::Nesting("too many program files".into()))?;
         tracing::debug!(file = %path.display(), "CALL PGM");
         self.units.push(Unit::new(path, id, input));
+        self.machine.params.enter_program();
         Ok(())
     }
 
@@ -500,6 +609,7 @@ impl Interpreter {
                 let d = error.map(|e| self.diag_end(&e));
                 if self.units.len() > 1 && mode != Mode::Syntax && d.is_none() {
                     self.units.pop();
+                    self.machine.params.leave_program();
                 } else {
                     self.done = true;
                 }
@@ -595,6 +705,7 @@ impl Interpreter {
         if matches!(block.stmt, Stmt::EndPgm) && called {
             self.blocks += 1;
             self.units.pop();
+            self.machine.params.leave_program();
             return Ok(());
         }
         let (line, col) = u.reader.position(block.start);
@@ -647,6 +758,8 @@ impl Interpreter {
             return None;
         }
         let op = self.queue.pop_front()?;
+        // ops leave in machine coordinates (datum shift, mirror, rotation, scaling)
+        let op = self.machine.output(op);
         self.machine.popped();
         Some(op)
     }
@@ -718,7 +831,10 @@ pub fn syntax_check(path: &Path) -> Result<(), Vec<Diagnostic>> {
 /// runtime errors included); a block with an error is skipped and the run goes on.
 pub fn check(path: &Path, start: Pose) -> Vec<Diagnostic> {
     match Interpreter::open(path, start) {
-        Ok(mut it) => it.run_all(Mode::Check),
+        Ok(mut it) => {
+            it.machine.set_dry_run(true);
+            it.run_all(Mode::Check)
+        }
         Err(d) => vec![d],
     }
 }

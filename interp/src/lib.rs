@@ -24,6 +24,7 @@ pub use interpreter::{
     RUN_IDLE_JUMP_LIMIT, check, syntax_check,
 };
 pub use klartext::contour::SPLINE_START_TOLERANCE;
+pub use klartext::cycle_table::{DatumTable, DatumTableError};
 pub use klartext::exec::{Blank, C_RADIUS_TOLERANCE, MAX_IPA};
 pub use klartext::tools::{Tool, ToolTable, ToolTableError};
 pub use op::{

@@ -118,8 +118,8 @@ fn unsupported_m_and_features() {
     let (_, d) = run_until_error(&program("L Z-10 FMAX M118"));
     assert_eq!((d.line, d.col), (2, 13));
     assert_eq!(d.message, "M118 not supported on this machine");
-    let (_, d) = run_until_error(&program("CYCL DEF 200 DRILLING"));
-    assert_eq!(d.message, "CYCL not supported yet");
+    let (_, d) = run_until_error(&program("CYCL DEF 262 THREAD MILLING ~\n Q335=10"));
+    assert_eq!(d.message, "cycle 262 is not supported");
     let (_, d) = run_until_error(&program("FN 20: WAIT FOR Q1"));
     assert_eq!(d.message, "FN 20 not supported yet");
     let (_, d) = run_until_error(&program("FN 9: IF +0 EQU +0 GOTO LBL 1"));

@@ -78,9 +78,23 @@ pub enum ParamKey {
     /// An address word of an old-format cycle: `F` (feed, in the program's F unit per
     /// minute, already converted to mm/s by the caller) or `DR` (+1 or −1).
     OldWord(&'static str),
+    /// The `F` word of sub-block `line` of an old-format cycle, mm/s (cycles with a plunging
+    /// and a milling feed on different sub-blocks; [`ParamKey::OldWord`]`("F")` is the first).
+    OldFeed {
+        /// Sub-block number.
+        line: u8,
+    },
 }
 
 /// The parameters of one cycle definition.
+///
+/// Values are passed as written (lengths mm, feeds mm/min, dwell times s). Words in place
+/// of a number: `FMAX` (allowed by the manual for retraction and pre-positioning feeds such
+/// as Q208 and Q253) is passed as `f64::INFINITY`; `FAUTO` is resolved by the caller to
+/// the feed of the TOOL CALL in mm/min; `PREDEF` to the global default, or `None`. A
+/// generator treats `None` for a parameter that later software versions added (Q395,
+/// Q379, …) as that parameter's neutral value and reports [`CycleError::Missing`] for the
+/// essential ones.
 pub trait ParamSource {
     /// The value of `key`, or `None` when the definition did not give it.
     fn get(&self, key: ParamKey) -> Option<f64>;

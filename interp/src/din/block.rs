@@ -8,6 +8,8 @@
 //! matched case-sensitively where the manual distinguishes them (`Xi` incremental, `XK`
 //! Cartesian), else upper-cased.
 
+use super::expr::{self, Expr};
+use super::flow::{self, Stmt};
 use crate::diag::ProgramError;
 
 /// Most words one block may carry.
@@ -22,6 +24,9 @@ pub enum DinValue {
     Unknown,
     /// A quoted text.
     Text(String),
+    /// A variable or a formula in parentheses (`X#l1`, `Z-#g2`, `X(#l1*2+5)`), evaluated when
+    /// the block runs.
+    Expr(Expr),
 }
 
 /// One address word.
@@ -48,6 +53,20 @@ pub enum DinLine {
         code: String,
         /// The parameter words after the code.
         words: Vec<DinWord>,
+    },
+    /// `SUBPROGRAM "name"`: the start of a local subprogram.
+    Subprogram {
+        /// The name between the quotes.
+        name: String,
+    },
+    /// A variable assignment, a control structure keyword, RETURN or a subprogram call.
+    Control {
+        /// The block number `N…`.
+        number: Option<u64>,
+        /// The statement.
+        stmt: Stmt,
+        /// Byte position of the statement in the line.
+        pos: usize,
     },
     /// A block of address words.
     Block {
@@ -155,7 +174,7 @@ pub fn parse_line(raw: &[u8]) -> Result<DinLine, SyntaxError> {
     let Some(&first) = text.get(i) else {
         return Ok(DinLine::Empty);
     };
-    if first == b'#' {
+    if first == b'#' && !flow::is_variable(text.get(i..).unwrap_or(&[])) {
         return Ok(DinLine::Empty);
     }
     if first == b'%' {
@@ -165,6 +184,13 @@ pub fn parse_line(raw: &[u8]) -> Result<DinLine, SyntaxError> {
         (first == b'N' || first == b'n') && text.get(i + 1).is_some_and(u8::is_ascii_digit);
     if !numbered && let Some(section) = section_code(&text, i)? {
         return Ok(section);
+    }
+    if !numbered && let Some(stmt) = flow::statement(&text, i)? {
+        return Ok(DinLine::Control {
+            number: None,
+            stmt,
+            pos: i,
+        });
     }
     if !numbered && looks_like_section(text.get(i..).unwrap_or(&[])) {
         let code: String = String::from_utf8_lossy(text.get(i..).unwrap_or(&[]))
@@ -193,6 +219,16 @@ pub fn parse_line(raw: &[u8]) -> Result<DinLine, SyntaxError> {
             ));
         }
         number_word = Some(n as u64);
+    }
+    while text.get(i).copied().is_some_and(is_blank) {
+        i += 1;
+    }
+    if let Some(stmt) = flow::statement(&text, i)? {
+        return Ok(DinLine::Control {
+            number: number_word,
+            stmt,
+            pos: i,
+        });
     }
     let words = words(&text, i)?;
     if words.is_empty() && number_word.is_none() {
@@ -228,6 +264,9 @@ fn section_code(text: &[u8], i: usize) -> Result<Option<DinLine>, SyntaxError> {
             // parameters of LATERAL_Y / SURFACE_Y / FACE_Y and CONTOUR-like sections
             let offset = i + rest.len() - rest.trim_start().len() + code.len();
             let byte_offset = offset.min(text.len());
+            if matches!(code, "SUBPROGRAM" | "UNTERPROGRAMM") {
+                return subprogram_name(text, byte_offset).map(Some);
+            }
             let words = if after.trim().is_empty() {
                 Vec::new()
             } else {
@@ -242,8 +281,40 @@ fn section_code(text: &[u8], i: usize) -> Result<Option<DinLine>, SyntaxError> {
     Ok(None)
 }
 
+/// `SUBPROGRAM "name"`: reads the quoted name after the code.
+fn subprogram_name(text: &[u8], mut i: usize) -> Result<DinLine, SyntaxError> {
+    while text.get(i).copied().is_some_and(is_blank) {
+        i += 1;
+    }
+    let missing = (
+        i,
+        ProgramError::Missing("SUBPROGRAM needs its name in quotes: SUBPROGRAM \"name\""),
+    );
+    if text.get(i) != Some(&b'"') {
+        return Err(missing);
+    }
+    let at = i;
+    let DinValue::Text(name) = value(text, &mut i, at, "SUBPROGRAM")? else {
+        return Err(missing);
+    };
+    let mut j = i;
+    while text.get(j).copied().is_some_and(is_blank) {
+        j += 1;
+    }
+    if name.trim().is_empty() {
+        return Err(missing);
+    }
+    if let Some(c) = text.get(j) {
+        return Err((
+            j,
+            ProgramError::Unexpected(format!("'{}' after the subprogram name", char::from(*c))),
+        ));
+    }
+    Ok(DinLine::Subprogram { name })
+}
+
 /// Reads address words from `i` to the end of the line.
-fn words(text: &[u8], mut i: usize) -> Result<Vec<DinWord>, SyntaxError> {
+pub(crate) fn words(text: &[u8], mut i: usize) -> Result<Vec<DinWord>, SyntaxError> {
     let mut out = Vec::new();
     loop {
         while text.get(i).copied().is_some_and(is_blank) {
@@ -317,6 +388,14 @@ fn value(text: &[u8], i: &mut usize, at: usize, addr: &str) -> Result<DinValue, 
             _ => break,
         }
         *i += 1;
+    }
+    let formula = match text.get(*i) {
+        Some(b'#') => Some(Expr::Var(expr::parse_var(text, i)?)),
+        Some(b'(') => Some(expr::parse_paren(text, i)?),
+        _ => None,
+    };
+    if let Some(e) = formula {
+        return Ok(DinValue::Expr(if neg { Expr::Neg(Box::new(e)) } else { e }));
     }
     let v = number(text, i).ok_or((at, ProgramError::MissingValue(addr.to_string())))?;
     Ok(DinValue::Num(if neg { -v } else { v }))

@@ -9,15 +9,112 @@
 //! `BR` at an element inserts a transition to the next element: BR>0 a rounding arc of
 //! radius BR tangent to both, BR<0 a chamfer whose ends lie |BR| from the corner on both
 //! elements (between two straight elements; next to an arc it is reported as not supported).
-//! Unknown coordinates (`X?`, `Z?`) are reported as not supported yet.
+//! Unknown coordinates (`X?`, `Z?`) of straight elements are solved from the line's angle A
+//! and, when both are unknown, from the next element (see `unknown`).
 
 use std::collections::VecDeque;
 
 use super::block::{DinValue, DinWord};
 use super::lathe::{Group, Lathe, err_at, groups, num};
+use super::unknown::{self, LineSpec};
 use crate::diag::ProgramError;
 use crate::klartext::exec::ExecError;
 use crate::op::{AxisLetter, Feed, Op, OpKind, Plane, Pose, SourceLoc};
+
+/// A contour element in the turning plane: points are (z, x radius).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Seg {
+    /// A straight element from `a` to `b`.
+    Line {
+        /// Start.
+        a: [f64; 2],
+        /// End.
+        b: [f64; 2],
+    },
+    /// An arc from `a` to `b` about `centre`, `sweep` degrees (positive from Z towards X).
+    Arc {
+        /// Start.
+        a: [f64; 2],
+        /// End.
+        b: [f64; 2],
+        /// Centre.
+        centre: [f64; 2],
+        /// Signed sweep, degrees.
+        sweep: f64,
+    },
+}
+
+/// Why a contour block failed: at this block, or at an unknown coordinate of an earlier one.
+#[derive(Debug)]
+pub(crate) enum ContourError {
+    /// At a byte position of the current block.
+    Here(ExecError),
+    /// At a place of an earlier block.
+    Earlier {
+        /// Line.
+        line: u32,
+        /// Column.
+        col: u32,
+        /// Block number.
+        block: Option<u64>,
+        /// What is wrong.
+        error: ProgramError,
+    },
+}
+
+const NEXT_NEEDS: &str = "the next element must be a line with its end point X, Z and its angle A";
+
+/// A line with both coordinates of its end unknown, waiting for the next element.
+#[derive(Debug)]
+struct Pending {
+    words: Vec<DinWord>,
+    number: Option<u64>,
+    line: u32,
+    col: u32,
+    start: [f64; 2],
+    angle: f64,
+}
+
+impl Pending {
+    fn fail(&self, why: &str) -> ContourError {
+        self.fail_with(ProgramError::Geometry(format!(
+            "X?/Z? cannot be solved: {why}"
+        )))
+    }
+
+    fn fail_with(&self, error: ProgramError) -> ContourError {
+        ContourError::Earlier {
+            line: self.line,
+            col: self.col,
+            block: self.number,
+            error,
+        }
+    }
+}
+
+/// The words of a line with its end point replaced by `end` (z, x radius).
+fn with_end(words: &[DinWord], end: [f64; 2]) -> Vec<DinWord> {
+    let pos = words
+        .iter()
+        .find(|w| matches!(w.addr.as_str(), "X" | "Z" | "Xi" | "Zi" | "A"))
+        .map_or(0, |w| w.pos);
+    let mut out: Vec<DinWord> = words
+        .iter()
+        .filter(|w| !matches!(w.addr.as_str(), "X" | "Z" | "Xi" | "Zi" | "A"))
+        .cloned()
+        .collect();
+    out.push(DinWord {
+        addr: "X".into(),
+        value: DinValue::Num(end[1] * 2.0),
+        pos,
+    });
+    out.push(DinWord {
+        addr: "Z".into(),
+        value: DinValue::Num(end[0]),
+        pos,
+    });
+    out
+}
 
 /// One stored contour element: the path op (feed to be replaced) and its block number.
 #[derive(Debug, Clone, PartialEq)]
@@ -36,6 +133,8 @@ pub(crate) struct Contour {
     corner: Option<f64>,
     /// The block that wrote that BR.
     corner_block: Option<u64>,
+    /// A line whose end waits for the next element.
+    pending: Option<Pending>,
 }
 
 impl Contour {
@@ -49,20 +148,113 @@ impl Contour {
             elements: Vec::new(),
             corner: None,
             corner_block: None,
+            pending: None,
         }
     }
 
-    /// Reads one contour block.
-    pub fn add(&mut self, words: &[DinWord], number: Option<u64>) -> Result<(), ExecError> {
+    /// Reads one contour block; `locate` gives the line and column of a byte position of
+    /// this block (kept for an unknown coordinate solved later).
+    pub fn add(
+        &mut self,
+        words: &[DinWord],
+        number: Option<u64>,
+        locate: &dyn Fn(usize) -> (u32, u32),
+    ) -> Result<(), ContourError> {
+        let spec = self.line_of(words)?;
+        let start = [self.pen.pos[AxisLetter::Z], self.pen.pos[AxisLetter::X]];
+        if let Some(p) = self.pending.take() {
+            let end = match spec {
+                Some(s) if !s.x_unknown && !s.z_unknown => match (s.z, s.x, s.angle) {
+                    (Some(z), Some(x), Some(a)) => unknown::intersect(p.start, p.angle, [z, x], a)
+                        .ok_or_else(|| p.fail("the next line runs parallel to it"))?,
+                    _ => return Err(p.fail(NEXT_NEEDS)),
+                },
+                _ => return Err(p.fail(NEXT_NEEDS)),
+            };
+            let solved = with_end(&p.words, end);
+            self.add_known(&solved, p.number)
+                .map_err(|(_, e)| p.fail_with(e))?;
+            return self.add(words, number, locate);
+        }
+        if let Some(s) = spec
+            && (s.x_unknown || s.z_unknown)
+        {
+            let pos = s.pos.unwrap_or(0);
+            let Some(a) = s.angle else {
+                return Err(ContourError::Here((
+                    Some(pos as u32),
+                    ProgramError::Geometry("X?/Z? of a line needs its angle A to be solved".into()),
+                )));
+            };
+            if s.x_unknown && s.z_unknown {
+                let (line, col) = locate(pos);
+                self.pending = Some(Pending {
+                    words: words.to_vec(),
+                    number,
+                    line,
+                    col,
+                    start,
+                    angle: a,
+                });
+                return Ok(());
+            }
+            let z = s.z.or(s.zi.map(|d| start[0] + d));
+            let x = s.x.or(s.xi.map(|d| start[1] + d));
+            let end = unknown::along_to(start, a, if s.z_unknown { None } else { z }, if s.x_unknown { None } else { x })
+                .ok_or(ContourError::Here((
+                    Some(pos as u32),
+                    ProgramError::Geometry(format!(
+                        "the unknown coordinate cannot be solved: a line at A{a} never reaches the given one"
+                    )),
+                )))?;
+            return self
+                .add_known(&with_end(words, end), number)
+                .map_err(ContourError::Here);
+        }
         if let Some(w) = words.iter().find(|w| w.value == DinValue::Unknown) {
-            return Err(err_at(
+            return Err(ContourError::Here(err_at(
                 w,
                 ProgramError::NotSupported(format!(
-                    "{}? in a contour (unknown coordinates)",
+                    "{}? outside a straight element with its angle A",
                     w.addr
                 )),
-            ));
+            )));
         }
+        self.add_known(words, number).map_err(ContourError::Here)
+    }
+
+    /// At the end of the contour: an unknown still waiting for its next element fails.
+    pub fn close(&mut self) -> Result<(), ContourError> {
+        match self.pending.take() {
+            Some(p) => Err(p.fail("the contour ends before the element it needs")),
+            None => Ok(()),
+        }
+    }
+
+    /// The straight element of a block, if it is one (explicit or modal G1).
+    fn line_of(&self, words: &[DinWord]) -> Result<Option<LineSpec>, ContourError> {
+        let gs = groups(words).map_err(ContourError::Here)?;
+        let mut line = None;
+        for g in &gs {
+            let code = match g.g {
+                None if g.words.is_empty() => continue,
+                None => self.pen.motion,
+                Some(c) => Some(c),
+            };
+            match code {
+                Some(1) if line.is_none() => line = Some(g.words),
+                _ => return Ok(None),
+            }
+        }
+        match line {
+            Some(w) => unknown::line_spec(w)
+                .map(Some)
+                .map_err(|(p, e)| ContourError::Here((Some(p as u32), e))),
+            None => Ok(None),
+        }
+    }
+
+    fn add_known(&mut self, words: &[DinWord], number: Option<u64>) -> Result<(), ExecError> {
         let br = match words.iter().find(|w| w.addr == "BR") {
             Some(w) => {
                 let v = num(w)?;
@@ -164,27 +356,7 @@ impl Contour {
                 "G890 needs a FINISHED PART contour starting with G0",
             ));
         };
-        let from_index = match ns {
-            None => 0,
-            Some(n) => self
-                .elements
-                .iter()
-                .position(|e| e.number == Some(n))
-                .ok_or_else(|| ProgramError::OutOfRange(format!("NS{n}: no contour block N{n}")))?,
-        };
-        let to_index = match ne {
-            None => self.elements.len(),
-            Some(n) => {
-                self.elements
-                    .iter()
-                    .rposition(|e| e.number == Some(n))
-                    .ok_or_else(|| {
-                        ProgramError::OutOfRange(format!("NE{n}: no contour block N{n}"))
-                    })?
-                    + 1
-            }
-        };
-        let picked = self.elements.get(from_index..to_index).unwrap_or(&[]);
+        let picked = self.pick(ns, ne)?;
         let start = match picked.first().map(|e| &e.kind) {
             Some(OpKind::Line { from, .. } | OpKind::Arc { from, .. }) => *from,
             _ => first,
@@ -219,6 +391,59 @@ impl Contour {
             out.push_back(Op { kind, loc });
         }
         Ok(())
+    }
+
+    /// The contour elements from block `ns` to block `ne` as (z, x radius) segments.
+    pub fn segments(&self, ns: Option<u64>, ne: Option<u64>) -> Result<Vec<Seg>, ProgramError> {
+        let zx = |p: &Pose| [p[AxisLetter::Z], p[AxisLetter::X]];
+        Ok(self
+            .pick(ns, ne)?
+            .iter()
+            .filter_map(|e| match &e.kind {
+                OpKind::Line { from, to, .. } => Some(Seg::Line {
+                    a: zx(from),
+                    b: zx(to),
+                }),
+                OpKind::Arc {
+                    from,
+                    to,
+                    center,
+                    sweep,
+                    ..
+                } => Some(Seg::Arc {
+                    a: zx(from),
+                    b: zx(to),
+                    centre: *center,
+                    sweep: *sweep,
+                }),
+                _ => None,
+            })
+            .collect())
+    }
+
+    /// The elements from block `ns` to block `ne` (all without them).
+    fn pick(&self, ns: Option<u64>, ne: Option<u64>) -> Result<&[Element], ProgramError> {
+        let from_index = match ns {
+            None => 0,
+            Some(n) => self
+                .elements
+                .iter()
+                .position(|e| e.number == Some(n))
+                .ok_or_else(|| ProgramError::OutOfRange(format!("NS{n}: no contour block N{n}")))?,
+        };
+        let to_index = match ne {
+            None => self.elements.len(),
+            Some(n) => {
+                self.elements
+                    .iter()
+                    .rposition(|e| e.number == Some(n))
+                    .ok_or_else(|| {
+                        ProgramError::OutOfRange(format!("NE{n}: no contour block N{n}"))
+                    })?
+                    + 1
+            }
+        };
+        Ok(self.elements.get(from_index..to_index).unwrap_or(&[]))
     }
 }
 

@@ -21,7 +21,7 @@
 use std::collections::VecDeque;
 
 use super::lathe::{Group, Lathe, err_at, num};
-use super::pattern::{CircleLayout, PatternEnd};
+use super::pattern::{CircleLayout, LinearStep, PatternEnd, linear_positions};
 use crate::diag::ProgramError;
 use crate::klartext::exec::ExecError;
 use crate::op::{AxisLetter, Feed, Op, Pose, SourceLoc, SpindleDir};
@@ -39,23 +39,100 @@ pub(crate) struct FacePattern {
     pub block: Option<u64>,
 }
 
-/// Reads a G745 group into a pattern.
-pub(crate) fn g745(g: &Group<'_>, block: Option<u64>) -> Result<FacePattern, ExecError> {
-    let centre = match (g.value("XK")?, g.value("YK")?, g.value("X")?, g.value("C")?) {
-        (xk, yk, None, None) => [xk.unwrap_or(0.0), yk.unwrap_or(0.0)],
+/// Reads a G743 group (linear pattern on the face) into a pattern.
+///
+/// First position: `XK`, `YK` (Cartesian) or `X` (diameter) and `C` (angle), as for G745.
+/// Q positions (default 1) follow in a row given by one of: the last position `I`, `J`
+/// (Cartesian; a coordinate left out stays that of the first position) and the span
+/// divided into Q − 1 equal steps; the distances `Ii`, `Ji` between neighbours; or the
+/// direction `A` (degrees from the XK axis, default 0) with the total length `R` or the
+/// distance `Ri` between neighbours. `ZS`/`ZE` as for G745.
+pub(crate) fn g743(g: &Group<'_>, block: Option<u64>) -> Result<FacePattern, ExecError> {
+    let start = pattern_centre(g)?;
+    let count = pattern_count(g)?;
+    let axis = |abs: &str, inc: &str| -> Result<Option<LinearStep>, ExecError> {
+        match (g.get(abs), g.get(inc)) {
+            (Some(_), Some(w)) => Err(err_at(
+                w,
+                ProgramError::Unexpected(format!("{abs} and {inc} in one pattern: give one")),
+            )),
+            (Some(w), None) => Ok(Some(LinearStep::To(num(w)?))),
+            (None, Some(w)) => Ok(Some(LinearStep::By(num(w)?))),
+            (None, None) => Ok(None),
+        }
+    };
+    let along = axis("R", "Ri")?;
+    let steps = match along {
+        None => [axis("I", "Ii")?, axis("J", "Ji")?],
+        Some(step) => {
+            if let Some(w) = ["I", "Ii", "J", "Ji"].iter().find_map(|a| g.get(a)) {
+                return Err(err_at(
+                    w,
+                    ProgramError::Unexpected(
+                        "a linear pattern is given by I/J, Ii/Ji or A with R/Ri: give one".into(),
+                    ),
+                ));
+            }
+            let (sa, ca) = g.value("A")?.unwrap_or(0.0).to_radians().sin_cos();
+            match step {
+                LinearStep::To(r) => [
+                    Some(LinearStep::To(start[0] + r * ca)),
+                    Some(LinearStep::To(start[1] + r * sa)),
+                ],
+                LinearStep::By(d) => [Some(LinearStep::By(d * ca)), Some(LinearStep::By(d * sa))],
+            }
+        }
+    };
+    Ok(FacePattern {
+        points: linear_positions(start, steps, count),
+        zs: g.value("ZS")?,
+        ze: g.value("ZE")?,
+        block,
+    })
+}
+
+/// The centre (G745) or first position (G743) of a face pattern: `XK`, `YK` or `X`
+/// (diameter) with `C`.
+fn pattern_centre(g: &Group<'_>) -> Result<[f64; 2], ExecError> {
+    match (g.value("XK")?, g.value("YK")?, g.value("X")?, g.value("C")?) {
+        (xk, yk, None, None) => Ok([xk.unwrap_or(0.0), yk.unwrap_or(0.0)]),
         (None, None, x, c) => {
             let r = x.unwrap_or(0.0) / 2.0;
             let a = c.unwrap_or(0.0).to_radians();
-            [r * a.cos(), r * a.sin()]
+            Ok([r * a.cos(), r * a.sin()])
         }
         _ => {
             let w = g.get("X").or(g.get("C"));
-            return Err((
+            Err((
                 w.map(|w| w.pos as u32),
-                ProgramError::Unexpected("pattern centre given both as XK/YK and as X/C".into()),
-            ));
+                ProgramError::Unexpected("pattern position given both as XK/YK and as X/C".into()),
+            ))
         }
-    };
+    }
+}
+
+/// Q of a pattern: a whole number from 1 to 10000, default 1.
+pub(crate) fn pattern_count(g: &Group<'_>) -> Result<u32, ExecError> {
+    match g.get("Q") {
+        None => Ok(1),
+        Some(q) => {
+            let n = num(q)?;
+            if !(n >= 1.0 && n.fract() == 0.0 && n <= 10_000.0) {
+                return Err(err_at(
+                    q,
+                    ProgramError::OutOfRange(format!(
+                        "pattern count Q{n} must be a whole number from 1 to 10000"
+                    )),
+                ));
+            }
+            Ok(n as u32)
+        }
+    }
+}
+
+/// Reads a G745 group into a pattern.
+pub(crate) fn g745(g: &Group<'_>, block: Option<u64>) -> Result<FacePattern, ExecError> {
+    let centre = pattern_centre(g)?;
     let end = match (g.get("W"), g.get("Wi")) {
         (Some(_), Some(wi)) => {
             return Err(err_at(
@@ -67,21 +144,7 @@ pub(crate) fn g745(g: &Group<'_>, block: Option<u64>) -> Result<FacePattern, Exe
         (None, Some(wi)) => PatternEnd::Increment(num(wi)?),
         (None, None) => PatternEnd::None,
     };
-    let count = match g.get("Q") {
-        None => 1,
-        Some(q) => {
-            let n = num(q)?;
-            if !(n >= 1.0 && n.fract() == 0.0 && n <= 10_000.0) {
-                return Err(err_at(
-                    q,
-                    ProgramError::OutOfRange(format!(
-                        "pattern count Q{n} must be a whole number from 1 to 10000"
-                    )),
-                ));
-            }
-            n as u32
-        }
-    };
+    let count = pattern_count(g)?;
     let direction = match g.get("V") {
         None => 0,
         Some(v) => {
@@ -212,6 +275,23 @@ pub(crate) fn cycle_call(
             ProgramError::Missing("the cycle needs its end point ZE"),
         ))?;
     let zs = g.value("ZS")?.or(pattern.and_then(|p| p.zs));
+    let (cycle, feed) = cycle_of(lathe, g, code)?;
+    Ok(CycleCall {
+        cycle,
+        zs,
+        ze,
+        feed,
+    })
+}
+
+/// The cycle of a G71, G74, G36 or G791 group and its feed (F of the group sets the feed,
+/// except for G36, where F is the thread pitch).
+pub(crate) fn cycle_of(
+    lathe: &mut Lathe,
+    g: &Group<'_>,
+    code: u32,
+) -> Result<(Cycle, Feed), ExecError> {
+    let here = g.g_word.map(|w| w.pos as u32);
     if let Some(f) = g.get("F")
         && code != 36
     {
@@ -265,12 +345,7 @@ pub(crate) fn cycle_call(
         Cycle::Tap { pitch } => Feed::PerRevolution(pitch),
         _ => lathe.need_feed().map_err(|(_, e)| (here, e))?,
     };
-    Ok(CycleCall {
-        cycle,
-        zs,
-        ze,
-        feed,
-    })
+    Ok((cycle, feed))
 }
 
 /// Runs a cycle at face point `p` (pattern position) or, with `p` None, at the current
@@ -292,64 +367,10 @@ pub(crate) fn run_at(
         }
         None => lathe.pos,
     };
-    let at_z = |z: f64| {
-        let mut q = here;
-        q[AxisLetter::Z] = z;
-        q
-    };
     let zs = call.zs.unwrap_or(clearance);
-    lathe.line(at_z(zs), rapid, loc, out);
     match call.cycle {
-        Cycle::Drill => {
-            lathe.line(at_z(call.ze), call.feed, loc, out);
-        }
-        Cycle::DeepHole {
-            first,
-            reduction,
-            retract,
-            minimum,
-        } => {
-            let down = if call.ze < zs { -1.0 } else { 1.0 };
-            let total = (call.ze - zs).abs();
-            let mut done = 0.0;
-            let mut step = first;
-            while done < total - 1e-9 {
-                let next = (done + step).min(total);
-                if done > 0.0 {
-                    // back to the depth reached, at rapid
-                    lathe.line(at_z(zs + down * done), rapid, loc, out);
-                }
-                lathe.line(at_z(zs + down * next), call.feed, loc, out);
-                done = next;
-                if done < total - 1e-9 {
-                    let back = match retract {
-                        Some(b) => zs + down * (done - b).max(0.0),
-                        None => zs,
-                    };
-                    lathe.line(at_z(back), rapid, loc, out);
-                }
-                step = (step - reduction).max(minimum);
-            }
-        }
-        Cycle::Tap { .. } => {
-            lathe.line(at_z(call.ze), call.feed, loc, out);
-            let reverse = match lathe.driven_dir {
-                SpindleDir::Cw => SpindleDir::Ccw,
-                SpindleDir::Ccw => SpindleDir::Cw,
-                SpindleDir::Off => SpindleDir::Off,
-            };
-            let forward = lathe.driven_dir;
-            lathe.driven_dir = reverse;
-            out.push_back(Op {
-                kind: lathe.driven_op(),
-                loc,
-            });
-            lathe.line(at_z(zs), call.feed, loc, out);
-            lathe.driven_dir = forward;
-            out.push_back(Op {
-                kind: lathe.driven_op(),
-                loc,
-            });
+        Cycle::Drill | Cycle::DeepHole { .. } | Cycle::Tap { .. } => {
+            plunge(lathe, call, AxisLetter::Z, zs, call.ze, loc, out);
         }
         Cycle::Slot {
             length,
@@ -363,6 +384,9 @@ pub(crate) fn run_at(
                 let y = here[AxisLetter::Y];
                 [co * x - s * y, s * x + co * y]
             });
+            let mut q = here;
+            q[AxisLetter::Z] = zs;
+            lathe.line(q, rapid, loc, out);
             let (s, co) = angle.to_radians().sin_cos();
             let end_face = [start_face[0] + length * co, start_face[1] + length * s];
             let ends = [face_in_turned(start_face, c), face_in_turned(end_face, c)];
@@ -388,6 +412,79 @@ pub(crate) fn run_at(
     let mut up = lathe.pos;
     up[AxisLetter::Z] = clearance;
     lathe.line(up, rapid, loc, out);
+}
+
+/// The drilling motion of G71, G74 and G36 along `axis` from where the tool stands: rapid
+/// to the start `s`, then to the end `e` (values of that axis in op units: Z, or X as a
+/// radius), and out of the hole again to `s`.
+pub(crate) fn plunge(
+    lathe: &mut Lathe,
+    call: &CycleCall,
+    axis: AxisLetter,
+    s: f64,
+    e: f64,
+    loc: SourceLoc,
+    out: &mut VecDeque<Op>,
+) {
+    let rapid = Feed::Rapid;
+    let here = lathe.pos;
+    let at = |v: f64| {
+        let mut q = here;
+        q[axis] = v;
+        q
+    };
+    lathe.line(at(s), rapid, loc, out);
+    match call.cycle {
+        Cycle::DeepHole {
+            first,
+            reduction,
+            retract,
+            minimum,
+        } => {
+            let down = if e < s { -1.0 } else { 1.0 };
+            let total = (e - s).abs();
+            let mut done = 0.0;
+            let mut step = first;
+            while done < total - 1e-9 {
+                let next = (done + step).min(total);
+                if done > 0.0 {
+                    // back to the depth reached, at rapid
+                    lathe.line(at(s + down * done), rapid, loc, out);
+                }
+                lathe.line(at(s + down * next), call.feed, loc, out);
+                done = next;
+                if done < total - 1e-9 {
+                    let back = match retract {
+                        Some(b) => s + down * (done - b).max(0.0),
+                        None => s,
+                    };
+                    lathe.line(at(back), rapid, loc, out);
+                }
+                step = (step - reduction).max(minimum);
+            }
+        }
+        Cycle::Tap { .. } => {
+            lathe.line(at(e), call.feed, loc, out);
+            let reverse = match lathe.driven_dir {
+                SpindleDir::Cw => SpindleDir::Ccw,
+                SpindleDir::Ccw => SpindleDir::Cw,
+                SpindleDir::Off => SpindleDir::Off,
+            };
+            let forward = lathe.driven_dir;
+            lathe.driven_dir = reverse;
+            out.push_back(Op {
+                kind: lathe.driven_op(),
+                loc,
+            });
+            lathe.line(at(s), call.feed, loc, out);
+            lathe.driven_dir = forward;
+            out.push_back(Op {
+                kind: lathe.driven_op(),
+                loc,
+            });
+        }
+        _ => lathe.line(at(e), call.feed, loc, out),
+    }
 }
 
 /// Reads the block number of a pattern for messages.

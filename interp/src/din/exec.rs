@@ -6,7 +6,10 @@
 //! first G are the modal ones (axis words of the modal motion G, F, S). T and M words act
 //! wherever they stand. M functions: M3/M4 main spindle, M103/M104 driven tool clockwise /
 //! counter-clockwise, M8 coolant, M14 C axis on act at block start; M5, M105, M9, M15 (C
-//! axis off) at block end; M0/M1 stop, M30/M2 end after the motion.
+//! axis off) at block end; M0/M1 stop, M30/M2 end after the motion. The speed words of a
+//! block (G96/G97 S, G197 S, a bare S) take effect before its M functions wherever they
+//! stand, so a spindle switched on and given a speed in one block gets one spindle op with
+//! the final speed (`M3 G96 S200` and `G96 S200 M3` are the same), at block start.
 //!
 //! Technology: G94 F mm/min, G95 F mm/rev (default), G96 S m/min, G97 S rpm, G26 S speed
 //! limit (recorded), G197 S driven tool rpm, G195 F mm per driven-tool revolution (turned
@@ -14,13 +17,20 @@
 //! together, 1 X then Z, 2 Z then X, 3 X only, 4 Z only), G110 C turns the C axis at rapid,
 //! G4 F dwells F seconds, G40/G41/G42 radius compensation, G890 finishes the FINISHED PART
 //! contour (NS/NE: first and last contour block).
+//!
+//! Patterns and cycles live in their own files: G745 and G743 face patterns with G71, G74,
+//! G36 and G791 (`cycles`), G744 and G746 lateral patterns drilling radially (`lateral`),
+//! G793 face contour milling (`facemill`), G810/G820 roughing (`roughing`).
 
 use std::collections::{HashMap, VecDeque};
 
 use super::block::DinWord;
 use super::contour::Contour;
 use super::cycles::{self, FacePattern};
+use super::facemill::{self, FaceContour};
+use super::lateral::{self, LateralPattern};
 use super::lathe::{FeedUnit, Group, Lathe, TOOL_CHANGE_POINT, err_at, groups, num};
+use super::roughing::{self, Bar};
 use crate::diag::ProgramError;
 use crate::klartext::exec::ExecError;
 use crate::op::{
@@ -43,13 +53,19 @@ pub(crate) struct DinExec {
     pub lathe: Lathe,
     /// Tool IDs from the TURRET section.
     pub tools: HashMap<u32, String>,
-    /// A G745 pattern waiting for the cycle of the next block.
+    /// A G743/G745 pattern waiting for the cycle of the next block.
     pub pending: Option<FacePattern>,
+    /// A G744/G746 pattern waiting for the cycle of the next block.
+    pub pending_lateral: Option<LateralPattern>,
+    /// A G793 contour being read, up to its G80.
+    pub face_contour: Option<FaceContour>,
+    /// The bar blank of the BLANK section (G20).
+    pub blank: Option<Bar>,
     /// The FINISHED PART contour.
     pub contour: Contour,
 }
 
-const CYCLES: [u32; 4] = [71, 74, 36, 791];
+const CYCLES: [u32; 5] = [71, 74, 36, 791, 793];
 
 fn whole(w: &DinWord, what: &str) -> Result<u32, ExecError> {
     let v = num(w)?;
@@ -111,6 +127,9 @@ impl DinExec {
             lathe: Lathe::new(start),
             tools: HashMap::new(),
             pending: None,
+            pending_lateral: None,
+            face_contour: None,
+            blank: None,
             contour: Contour::new(),
         }
     }
@@ -168,21 +187,51 @@ impl DinExec {
         loc: SourceLoc,
         out: &mut VecDeque<Op>,
     ) -> Result<DinFlow, ExecError> {
+        if let Some(fc) = self.face_contour.as_mut() {
+            if let Some(w) = words.iter().find(|w| w.addr == "T" || w.addr == "M") {
+                return Err(err_at(
+                    w,
+                    ProgramError::Unexpected(
+                        "tool call or M function inside a G793 contour (end it with G80)".into(),
+                    ),
+                ));
+            }
+            if fc.add(words)?
+                && let Some(fc) = self.face_contour.take()
+            {
+                fc.run(&mut self.lathe, loc, out);
+            }
+            return Ok(DinFlow::Continue);
+        }
         let gs = groups(words)?;
         let has_cycle = gs.iter().any(|g| g.g.is_some_and(|n| CYCLES.contains(&n)));
         if let Some(p) = self.pending.take_if(|_| !has_cycle) {
             let msg = format!(
                 "{} has no ZE, so the next block must be a drilling or milling cycle \
-                 (G71, G74, G36, G791)",
+                 (G71, G74, G36, G791, G793)",
                 cycles::pattern_block(&p)
+            );
+            return Err((None, ProgramError::Geometry(msg)));
+        }
+        if let Some(p) = self.pending_lateral.take_if(|_| !has_cycle) {
+            let at = p.block.map_or("the pattern".to_string(), |n| {
+                format!("the pattern in block {n}")
+            });
+            let msg = format!(
+                "{at} has no XE, so the next block must be a drilling cycle (G71, G74, G36)"
             );
             return Err((None, ProgramError::Geometry(msg)));
         }
         let ms = MSet::read(words)?;
         let emit = |out: &mut VecDeque<Op>, kind: OpKind| out.push_back(Op { kind, loc });
+        // the block's speeds first, wherever they stand, so that the spindle starts once
+        // with its final speed: `M3 G96 S200` and `G96 S200 M3` give the same single op
+        let (main_changed, driven_changed) = self.technology(&gs)?;
         // block start: spindles, coolant, C axis
         if let Some(d) = ms.main {
             self.lathe.main_dir = d;
+        }
+        if (ms.main.is_some() || main_changed) && self.lathe.main_dir != SpindleDir::Off {
             emit(out, self.lathe.main_spindle_op());
         }
         if ms.c_on {
@@ -206,13 +255,14 @@ impl DinExec {
                 },
             );
         }
-        for g in &gs {
-            self.group(g, number, loc, out)?;
-        }
-        // the driven tool starts after its speed is known (G197 may stand in this block)
         if let Some(d) = ms.driven {
             self.lathe.driven_dir = d;
+        }
+        if (ms.driven.is_some() || driven_changed) && self.lathe.driven_dir != SpindleDir::Off {
             emit(out, self.lathe.driven_op());
+        }
+        for g in &gs {
+            self.group(g, number, loc, out)?;
         }
         if ms.main_off {
             self.lathe.main_dir = SpindleDir::Off;
@@ -240,6 +290,53 @@ impl DinExec {
             emit(out, OpKind::Stop { optional: true });
         }
         Ok(DinFlow::Continue)
+    }
+
+    /// Applies the speed words of a block (G96/G97 S, G197 S, S of the modal group) before
+    /// anything else runs; returns whether the main and the driven spindle speed changed.
+    fn technology(&mut self, gs: &[Group<'_>]) -> Result<(bool, bool), ExecError> {
+        let l = &mut self.lathe;
+        let (mut main, mut driven) = (false, false);
+        for g in gs {
+            let gpos = g.g_word.map(|w| w.pos as u32);
+            match g.g {
+                None => {
+                    if let Some(s) = g.get("S") {
+                        let v = num(s)?;
+                        l.main_speed = match l.main_speed {
+                            SpindleSpeed::SurfaceSpeed(_) => SpindleSpeed::SurfaceSpeed(v),
+                            SpindleSpeed::Rpm(_) => SpindleSpeed::Rpm(v),
+                        };
+                        main = true;
+                    }
+                }
+                Some(mode @ (96 | 97)) => {
+                    let s = g
+                        .value("S")?
+                        .ok_or((gpos, ProgramError::Missing("G96/G97 need the speed S")))?;
+                    l.main_speed = if mode == 96 {
+                        SpindleSpeed::SurfaceSpeed(s)
+                    } else {
+                        SpindleSpeed::Rpm(s)
+                    };
+                    main = true;
+                }
+                Some(197) => {
+                    let s = g
+                        .value("S")?
+                        .ok_or((gpos, ProgramError::Missing("G197 needs the speed S")))?;
+                    l.driven_speed = s;
+                    if let Some(f) = l.driven_feed
+                        && l.feed_unit == FeedUnit::DrivenPerRevolution
+                    {
+                        l.feed = Some(Feed::Rate(f * s / 60.0));
+                    }
+                    driven = true;
+                }
+                _ => {}
+            }
+        }
+        Ok((main, driven))
     }
 
     fn check_words(g: &Group<'_>, allowed: &[&str], name: &'static str) -> Result<(), ExecError> {
@@ -279,8 +376,29 @@ impl DinExec {
                 ],
                 "G745",
             )),
-            Some(71 | 36) => Some((&["Z", "ZS", "ZE", "F"], "G71/G36")),
-            Some(74) => Some((&["Z", "ZS", "ZE", "P", "I", "B", "J", "F"], "G74")),
+            Some(743) => Some((
+                &[
+                    "XK", "YK", "X", "C", "Q", "I", "J", "Ii", "Ji", "A", "R", "Ri", "ZS", "ZE",
+                    "F",
+                ],
+                "G743",
+            )),
+            Some(744) => Some((
+                &["Z", "C", "Q", "K", "Ki", "W", "Wi", "XS", "XE", "F"],
+                "G744",
+            )),
+            Some(746) => Some((
+                &[
+                    "X", "Z", "C", "K", "A", "W", "Wi", "Q", "V", "XS", "XE", "F",
+                ],
+                "G746",
+            )),
+            Some(793) => Some((&["ZS", "ZE", "P", "F"], "G793")),
+            Some(71 | 36) => Some((&["Z", "ZS", "ZE", "X", "XS", "XE", "F"], "G71/G36")),
+            Some(74) => Some((
+                &["Z", "ZS", "ZE", "X", "XS", "XE", "P", "I", "B", "J", "F"],
+                "G74",
+            )),
             Some(791) => Some((&["K", "A", "Z", "ZS", "ZE", "P", "F"], "G791")),
             _ => None,
         };
@@ -294,19 +412,6 @@ impl DinExec {
                 Self::check_words(g, &[&AXES[..], &["F", "S"]].concat(), "DIN")?;
                 if let Some(f) = g.get("F") {
                     l.set_feed(num(f)?, f)?;
-                }
-                if let Some(s) = g.get("S") {
-                    let v = num(s)?;
-                    l.main_speed = match l.main_speed {
-                        SpindleSpeed::SurfaceSpeed(_) => SpindleSpeed::SurfaceSpeed(v),
-                        SpindleSpeed::Rpm(_) => SpindleSpeed::Rpm(v),
-                    };
-                    if l.main_dir != SpindleDir::Off {
-                        out.push_back(Op {
-                            kind: l.main_spindle_op(),
-                            loc,
-                        });
-                    }
                 }
                 if g.words.iter().any(|w| AXES.contains(&w.addr.as_str())) {
                     let motion = l.motion.ok_or((
@@ -398,39 +503,8 @@ impl DinExec {
                     l.set_feed(num(f)?, f)?;
                 }
             }
-            Some(mode @ (96 | 97)) => {
-                let s = g
-                    .value("S")?
-                    .ok_or((gpos, ProgramError::Missing("G96/G97 need the speed S")))?;
-                l.main_speed = if mode == 96 {
-                    SpindleSpeed::SurfaceSpeed(s)
-                } else {
-                    SpindleSpeed::Rpm(s)
-                };
-                if l.main_dir != SpindleDir::Off {
-                    out.push_back(Op {
-                        kind: l.main_spindle_op(),
-                        loc,
-                    });
-                }
-            }
-            Some(197) => {
-                let s = g
-                    .value("S")?
-                    .ok_or((gpos, ProgramError::Missing("G197 needs the speed S")))?;
-                l.driven_speed = s;
-                if let Some(f) = l.driven_feed
-                    && l.feed_unit == FeedUnit::DrivenPerRevolution
-                {
-                    l.feed = Some(Feed::Rate(f * s / 60.0));
-                }
-                if l.driven_dir != SpindleDir::Off {
-                    out.push_back(Op {
-                        kind: l.driven_op(),
-                        loc,
-                    });
-                }
-            }
+            // speeds were applied before the block's other words (see `technology`)
+            Some(96 | 97 | 197) => {}
             Some(110) => {
                 let c = g
                     .value("C")?
@@ -445,14 +519,45 @@ impl DinExec {
                 to[AxisLetter::C] = c;
                 l.line(to, Feed::Rapid, loc, out);
             }
-            Some(745) => {
+            Some(code @ (744 | 746)) => {
+                if !l.c_axis {
+                    return Err((
+                        gpos,
+                        ProgramError::Missing(
+                            "a lateral pattern needs the C axis switched on (M14)",
+                        ),
+                    ));
+                }
+                if let Some(f) = g.get("F") {
+                    l.set_feed(num(f)?, f)?;
+                }
+                let pattern = if code == 744 {
+                    lateral::g744(g, number)?
+                } else {
+                    lateral::g746(g, number)?
+                };
+                if pattern.xe.is_some() {
+                    let call = lateral::lateral_call(l, g, 71, &pattern)?;
+                    let clearance = l.pos[AxisLetter::X];
+                    for p in &pattern.points {
+                        lateral::run_lateral(l, &call, *p, clearance, loc, out);
+                    }
+                } else {
+                    self.pending_lateral = Some(pattern);
+                }
+            }
+            Some(code @ (743 | 745)) => {
                 if !l.c_axis {
                     return Err((
                         gpos,
                         ProgramError::Missing("a face pattern needs the C axis switched on (M14)"),
                     ));
                 }
-                let pattern = cycles::g745(g, number)?;
+                let pattern = if code == 743 {
+                    cycles::g743(g, number)?
+                } else {
+                    cycles::g745(g, number)?
+                };
                 if pattern.ze.is_some() {
                     let call = cycles::cycle_call(l, g, 71, Some(&pattern))?;
                     let clearance = l.pos[AxisLetter::Z];
@@ -461,6 +566,33 @@ impl DinExec {
                     }
                 } else {
                     self.pending = Some(pattern);
+                }
+            }
+            Some(793) => {
+                if !l.c_axis {
+                    return Err((
+                        gpos,
+                        ProgramError::Missing("G793 needs the C axis switched on (M14)"),
+                    ));
+                }
+                if self.pending_lateral.take().is_some() {
+                    return Err((
+                        gpos,
+                        ProgramError::Unexpected(
+                            "G793 mills on the face: it cannot follow a lateral pattern".into(),
+                        ),
+                    ));
+                }
+                let pattern = self.pending.take();
+                self.face_contour = Some(facemill::g793(l, g, pattern)?);
+            }
+            Some(code @ (71 | 74 | 36 | 791)) if self.pending_lateral.is_some() => {
+                if let Some(p) = self.pending_lateral.take() {
+                    let call = lateral::lateral_call(l, g, code, &p)?;
+                    let clearance = l.pos[AxisLetter::X];
+                    for pt in &p.points {
+                        lateral::run_lateral(l, &call, *pt, clearance, loc, out);
+                    }
                 }
             }
             Some(code @ (71 | 74 | 36 | 791)) => {
@@ -475,6 +607,24 @@ impl DinExec {
                     }
                     None => cycles::run_at(l, &call, None, clearance, loc, out),
                 }
+            }
+            Some(code @ (810 | 820)) => {
+                let allowed: &[&str] = if code == 810 {
+                    &["NS", "NE", "P", "I", "K", "Z", "F"]
+                } else {
+                    &["NS", "NE", "P", "I", "K", "X", "F"]
+                };
+                Self::check_words(g, allowed, "G810/G820")?;
+                let block_of = |addr: &str| -> Result<Option<u64>, ExecError> {
+                    match g.get(addr) {
+                        None => Ok(None),
+                        Some(w) => whole(w, addr).map(|n| Some(u64::from(n))),
+                    }
+                };
+                let (ns, ne) = (block_of("NS")?, block_of("NE")?);
+                let p = roughing::params(l, g, code)?;
+                let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
+                roughing::rough(l, &segs, self.blank, &p, loc, out).map_err(|e| (gpos, e))?;
             }
             Some(890) => {
                 let block_of = |addr: &str| -> Result<Option<u64>, ExecError> {
@@ -495,10 +645,8 @@ impl DinExec {
             }
             Some(other) => {
                 let name = match other {
-                    743 | 744 => Some("G743/G744 linear patterns"),
-                    746 => Some("G746 lateral circular pattern"),
-                    793 | 792 | 794 | 797 | 798 => Some("contour milling cycles"),
-                    810 | 820 | 830 | 860 => Some("roughing and recessing cycles"),
+                    792 | 794 | 797 | 798 => Some("contour milling cycles other than G793"),
+                    830 | 860 => Some("contour-parallel roughing and recessing cycles"),
                     31 | 72 | 73 => Some("threading, boring and tapping cycles"),
                     _ => None,
                 };

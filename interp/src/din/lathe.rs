@@ -48,6 +48,10 @@ pub(crate) fn num(w: &DinWord) -> Result<f64, ExecError> {
             ProgramError::NotSupported(format!("{}? outside a FINISHED PART contour", w.addr)),
         )),
         DinValue::Text(_) => Err(err_at(w, ProgramError::MissingValue(w.addr.clone()))),
+        DinValue::Expr(_) => Err(err_at(
+            w,
+            ProgramError::Unexpected(format!("formula in {} where it is not evaluated", w.addr)),
+        )),
     }
 }
 

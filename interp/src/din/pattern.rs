@@ -1,5 +1,6 @@
-//! Circular hole patterns (G745 on the face, G746 on the lateral surface): the angles of the
-//! positions from A, W or Wi, Q and V, as the DIN manual specifies them for G745.
+//! Hole patterns: circular (G745 on the face, G746 on the lateral surface), the angles of the
+//! positions from A, W or Wi, Q and V, as the DIN manual specifies them for G745; and linear
+//! (G743, G744), Q positions in a row from a first one.
 //!
 //! Rules: Q positions (default 1) starting at A (default 0°). V=0 without W: the full circle
 //! is divided into Q equal steps; V=0 with W: the longer of the two arcs from A to W is
@@ -92,6 +93,37 @@ impl CircleLayout {
     }
 }
 
+/// How a linear pattern continues from its first position, per coordinate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LinearStep {
+    /// The coordinate of the last position: the span is divided into Q − 1 equal steps.
+    To(f64),
+    /// The distance between neighbouring positions.
+    By(f64),
+}
+
+/// The positions of a linear pattern: `count` points from `start`, each coordinate
+/// advancing as `steps` says (None: it stays). With one position only the start remains.
+pub fn linear_positions(
+    start: [f64; 2],
+    steps: [Option<LinearStep>; 2],
+    count: u32,
+) -> Vec<[f64; 2]> {
+    let gaps = f64::from(count.saturating_sub(1).max(1));
+    let step = |k: usize| match steps.get(k).copied().flatten() {
+        None => 0.0,
+        Some(LinearStep::By(d)) => d,
+        Some(LinearStep::To(end)) => (end - start.get(k).copied().unwrap_or(0.0)) / gaps,
+    };
+    let (d0, d1) = (step(0), step(1));
+    (0..count)
+        .map(|k| {
+            let k = f64::from(k);
+            [start[0] + k * d0, start[1] + k * d1]
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -117,6 +149,23 @@ mod tests {
             .angles()
             .unwrap();
         assert_eq!(a, vec![0.0, 90.0, 180.0, 270.0]);
+    }
+
+    #[test]
+    fn linear_layouts_divide_the_span_or_step() {
+        let p = linear_positions([0.0, 10.0], [Some(LinearStep::To(30.0)), None], 4);
+        assert_eq!(
+            p,
+            vec![[0.0, 10.0], [10.0, 10.0], [20.0, 10.0], [30.0, 10.0]]
+        );
+        let p = linear_positions(
+            [1.0, 2.0],
+            [Some(LinearStep::By(-1.5)), Some(LinearStep::By(2.0))],
+            3,
+        );
+        assert_eq!(p, vec![[1.0, 2.0], [-0.5, 4.0], [-2.0, 6.0]]);
+        let p = linear_positions([5.0, 5.0], [Some(LinearStep::To(9.0)), None], 1);
+        assert_eq!(p, vec![[5.0, 5.0]]);
     }
 
     #[test]

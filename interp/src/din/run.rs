@@ -11,17 +11,28 @@
 //! of the manual's short examples): its blocks run as a MACHINING section. END (also the
 //! Russian edition's `КОНЕЦ`) ends the run; M30/M2 end it early, and the rest is only checked
 //! for syntax.
+//!
+//! Variable assignments, control structures, subprogram calls and RETURN (see `flow`) run
+//! in MACHINING and in called subprograms (see `control`); in the other sections they are
+//! errors, and where blocks are only read (a syntax check, subprograms nobody calls) their
+//! structures are still checked for nesting. Variables and formulas in address words are
+//! evaluated when the block runs.
 
 use std::collections::VecDeque;
 use std::path::PathBuf;
 
 use super::block::{DinLine, DinValue, DinWord, parse_line};
+use super::contour::ContourError;
+use super::control::Control;
 use super::exec::{DinExec, DinFlow};
+use super::flow;
+use super::lathe::groups;
+use super::roughing;
 use super::tilt::LateralPlane;
 use crate::diag::{Diagnostic, ProgramError};
 use crate::dialect::DialectRun;
 use crate::op::{Op, Pose, SourceLoc};
-use crate::source::{BlockReader, ProgramInput};
+use crate::source::{BlockReader, BlockStart, ProgramInput};
 
 /// Program sections in their required order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -77,7 +88,7 @@ impl Section {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Phase {
+pub(super) enum Phase {
     Running,
     Stopped,
     Ended,
@@ -85,7 +96,7 @@ enum Phase {
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Mode {
+pub(super) enum Mode {
     Run,
     Check,
     Syntax,
@@ -93,15 +104,21 @@ enum Mode {
 
 /// A lathe DIN program being run line by line.
 pub(crate) struct DinProgram {
-    file: PathBuf,
-    reader: BlockReader,
-    exec: DinExec,
-    queue: VecDeque<Op>,
-    section: Option<Section>,
-    phase: Phase,
-    finished: bool,
-    blocks: u64,
-    number: Option<u64>,
+    pub(super) file: PathBuf,
+    pub(super) reader: BlockReader,
+    pub(super) exec: DinExec,
+    pub(super) queue: VecDeque<Op>,
+    pub(super) section: Option<Section>,
+    pub(super) phase: Phase,
+    pub(super) finished: bool,
+    pub(super) blocks: u64,
+    pub(super) number: Option<u64>,
+    /// Variables, control structures and subprogram calls.
+    pub(super) control: Control,
+    /// Where the current block starts in the file.
+    pub(super) current: BlockStart,
+    /// Diagnostics found while reading ahead (skipped branches) in a check run.
+    pub(super) deferred: Vec<Diagnostic>,
 }
 
 /// Reads the parameters of a LATERAL_Y / SURFACE_Y section code.
@@ -164,20 +181,24 @@ impl DinProgram {
             finished: false,
             blocks: 0,
             number: None,
+            control: Control::new(),
+            current: BlockStart { offset: 0, line: 1 },
+            deferred: Vec::new(),
         }
     }
 
-    fn diag(&self, pos: usize, error: &ProgramError) -> Diagnostic {
+    pub(super) fn diag(&self, pos: usize, error: &ProgramError) -> Diagnostic {
         let (line, col) = self.reader.position(pos);
         Diagnostic::new(self.file.clone(), line, col, self.number, error)
     }
 
-    fn step(&mut self, mode: Mode) -> Result<(), Diagnostic> {
+    pub(super) fn step(&mut self, mode: Mode) -> Result<(), Diagnostic> {
         match self.reader.next_block() {
-            Ok(Some(_)) => {}
+            Ok(Some(at)) => self.current = at,
             Ok(None) => {
                 let was = self.phase;
                 self.phase = Phase::Done;
+                self.end_of_text()?;
                 if was == Phase::Ended {
                     return Ok(());
                 }
@@ -213,9 +234,17 @@ impl DinProgram {
         match line {
             DinLine::Empty | DinLine::Name => Ok(()),
             DinLine::Section { code, words } => self.section(&code, &words, start, mode),
+            DinLine::Subprogram { name } => {
+                let first = self.subprogram_start(&name, start);
+                self.section("SUBPROGRAM", &[], start, mode).and(first)
+            }
+            DinLine::Control { number, stmt, pos } => {
+                self.number = number;
+                self.statement(stmt, pos, mode)
+            }
             DinLine::Block { number, words } => {
                 self.number = number;
-                self.nc_block(&words, start, mode)
+                self.nc_block(words, start, mode)
             }
         }
     }
@@ -230,6 +259,12 @@ impl DinProgram {
         let Some(next) = Section::from_code(code) else {
             return Err(self.diag(start, &ProgramError::UnknownBlock(code.to_string())));
         };
+        // what the previous section left open is reported, and this section still begins
+        let mut left_open = self.section_boundary(start);
+        if self.section == Some(Section::Finished) && next != Section::Finished {
+            let r = self.exec.contour.close();
+            left_open = left_open.and(r.map_err(|e| self.contour_diag(e, start)));
+        }
         if let Some(cur) = self.section
             && (next < cur || (next == cur && !next.repeatable()))
         {
@@ -272,10 +307,15 @@ impl DinProgram {
                 self.finished = true;
             }
         }
-        Ok(())
+        left_open
     }
 
-    fn nc_block(&mut self, words: &[DinWord], start: usize, mode: Mode) -> Result<(), Diagnostic> {
+    fn nc_block(
+        &mut self,
+        mut words: Vec<DinWord>,
+        start: usize,
+        mode: Mode,
+    ) -> Result<(), Diagnostic> {
         let section = match self.section {
             Some(s) => s,
             None => {
@@ -286,9 +326,10 @@ impl DinProgram {
         };
         match section {
             Section::Turret => {
-                self.turret(words);
+                self.turret(&words);
                 return Ok(());
             }
+            Section::Subprogram if self.control.in_call() => {}
             Section::Subprogram => return Ok(()),
             Section::Machining => {}
             Section::Finished => {
@@ -302,10 +343,34 @@ impl DinProgram {
                 }
                 if mode != Mode::Syntax {
                     let number = self.number;
-                    self.exec
+                    flow::resolve(&mut words, self.control.vars())
+                        .map_err(|(p, e)| self.diag(p, &e))?;
+                    let reader = &self.reader;
+                    let r = self
+                        .exec
                         .contour
-                        .add(words, number)
+                        .add(&words, number, &|p| reader.position(p));
+                    r.map_err(|e| self.contour_diag(e, start))?;
+                }
+                return Ok(());
+            }
+            Section::Blank if mode != Mode::Syntax => {
+                if let Some(w) = words.iter().find(|w| w.addr == "T" || w.addr == "M") {
+                    return Err(self.diag(
+                        w.pos,
+                        &ProgramError::Unexpected(
+                            "tool call or M function outside a MACHINING section".into(),
+                        ),
+                    ));
+                }
+                flow::resolve(&mut words, self.control.vars())
+                    .map_err(|(p, e)| self.diag(p, &e))?;
+                let gs = groups(&words)
+                    .map_err(|(p, e)| self.diag(p.map_or(start, |p| p as usize), &e))?;
+                for g in gs.iter().filter(|g| g.g == Some(20)) {
+                    let bar = roughing::bar(g)
                         .map_err(|(p, e)| self.diag(p.map_or(start, |p| p as usize), &e))?;
+                    self.exec.blank = Some(bar);
                 }
                 return Ok(());
             }
@@ -321,7 +386,7 @@ impl DinProgram {
                 return Ok(());
             }
             _ => {
-                if let Some(w) = moves_or_calls(words) {
+                if let Some(w) = moves_or_calls(&words) {
                     return Err(self.diag(
                         w.pos,
                         &ProgramError::Unexpected(
@@ -346,9 +411,10 @@ impl DinProgram {
             block: self.number,
         };
         self.blocks += 1;
+        flow::resolve(&mut words, self.control.vars()).map_err(|(p, e)| self.diag(p, &e))?;
         let flow = self
             .exec
-            .block(words, self.number, loc, &mut self.queue)
+            .block(&words, self.number, loc, &mut self.queue)
             .map_err(|(p, e)| self.diag(p.map_or(start, |p| p as usize), &e))?;
         if flow == DinFlow::End {
             self.phase = Phase::Stopped;
@@ -357,6 +423,18 @@ impl DinProgram {
             }
         }
         Ok(())
+    }
+
+    fn contour_diag(&self, e: ContourError, start: usize) -> Diagnostic {
+        match e {
+            ContourError::Here((p, e)) => self.diag(p.map_or(start, |p| p as usize), &e),
+            ContourError::Earlier {
+                line,
+                col,
+                block,
+                error,
+            } => Diagnostic::new(self.file.clone(), line, col, block, &error),
+        }
     }
 
     fn turret(&mut self, words: &[DinWord]) {
@@ -385,6 +463,7 @@ impl DinProgram {
             if let Err(d) = self.step(mode) {
                 diags.push(d);
             }
+            diags.append(&mut self.deferred);
             self.queue.clear();
         }
         diags

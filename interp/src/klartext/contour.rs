@@ -5,8 +5,12 @@
 //! replaces their common corner. CHF cuts the corner with a straight line whose ends lie the
 //! chamfer length away from the corner on both lines; RND inserts an arc of the given radius
 //! tangent to both elements. The F of the block acts for the inserted element only; without
-//! it the modal feed applies. This version rounds and chamfers corners between two straight
-//! lines in the working plane (an arc next to RND or CHF is reported as not supported).
+//! it the modal feed applies. RND rounds the corner between any two lines or arcs of the
+//! working plane (line/line, line/arc, arc/line, arc/arc): the rounding arc's centre lies at
+//! distance R from both elements on the inside of the corner, both elements are trimmed to
+//! the tangent points, and a radius that needs more than an element offers is an error. CHF
+//! is only defined between two straight lines (the TNC manuals list it as "chamfer between
+//! two straight lines"); next to an arc it is an error.
 //!
 //! SPL: each axis written in the block follows `P(t) = K3·t³ + K2·t² + K1·t + end` while t
 //! runs from 1 to 0, so the start is `end + K3 + K2 + K1`; it must lie within 1 µm of the
@@ -85,7 +89,7 @@ impl Machine {
     }
 
     /// Cuts the corner between the held element and `next` (a motion op starting at the
-    /// corner): shortens the held line, pushes the chamfer or rounding, and returns `next`
+    /// corner): shortens the held element, pushes the chamfer or rounding, and returns `next`
     /// starting where the inserted element ends.
     pub(super) fn resolve_corner(
         &mut self,
@@ -97,93 +101,80 @@ impl Machine {
         };
         let what = if corner.round { "RND" } else { "CHF" };
         let plane = self.plane;
-        let (a, b, _) = plane.axes();
         let held = self.held_at.and_then(|i| out.get_mut(i));
-        let Some(Op {
-            kind: OpKind::Line {
-                from: p0, to: p1, ..
-            },
-            loc,
-        }) = held
-        else {
-            return Err(here(ProgramError::NotSupported(format!(
-                "{what} after an arc or spline (only between two straight lines)"
+        let Some(Op { kind: held, loc }) = held else {
+            return Err(here(ProgramError::Geometry(format!(
+                "{what} must follow a contour element (L, C, CR, CT, LP, CP, CTP)"
             ))));
         };
-        let OpKind::Line { to: p2, feed, .. } = next else {
-            return Err(here(ProgramError::NotSupported(format!(
-                "{what} before an arc (only between two straight lines)"
-            ))));
-        };
-        let corner_pt = [p1[a], p1[b]];
-        let d1 = geom::sub(corner_pt, [p0[a], p0[b]]);
-        let d2 = geom::sub([p2[a], p2[b]], corner_pt);
-        let (l1, l2) = (geom::norm(d1), geom::norm(d2));
-        if l1 < 1e-9 || l2 < 1e-9 {
-            return Err(here(ProgramError::Geometry(format!(
-                "{what} needs both neighbouring lines to move in the working plane"
-            ))));
-        }
-        let u1 = [d1[0] / l1, d1[1] / l1];
-        let u2 = [d2[0] / l2, d2[1] / l2];
-        let cross = u1[0] * u2[1] - u1[1] * u2[0];
-        let dot = u1[0] * u2[0] + u1[1] * u2[1];
-        // turning angle between the lines, in (-180, 180)
-        let turn = cross.atan2(dot);
-        if turn.abs() < 1e-9 {
-            return Err(here(ProgramError::Geometry(format!(
-                "{what} between two collinear lines: there is no corner"
-            ))));
-        }
-        // distance from the corner to the tangent (or chamfer) points along each line
-        let dist = if corner.round {
-            corner.size * (turn.abs() / 2.0).tan()
-        } else {
-            corner.size
-        };
-        if dist > l1 + 1e-9 || dist > l2 + 1e-9 {
-            return Err(here(ProgramError::Geometry(format!(
-                "{what} {:.4} mm does not fit: it needs {:.4} mm of each line, the lines are {:.4} and {:.4} mm",
-                corner.size, dist, l1, l2
-            ))));
-        }
-        // points on the full 3-D lines at the in-plane distance `dist` from the corner
-        let t1 = lerp(p1, p0, dist / l1);
-        let t2 = lerp(p1, p2, dist / l2);
-        *p1 = t1;
         let loc = *loc;
-        let inserted = if corner.round {
-            let left = [-u1[1], u1[0]];
-            let side = turn.signum();
-            let centre = [
-                t1[a] + side * corner.size * left[0],
-                t1[b] + side * corner.size * left[1],
-            ];
-            OpKind::Arc {
-                from: t1,
-                to: t2,
-                center: centre,
-                plane,
-                sweep: turn.to_degrees(),
-                feed: corner.feed,
-            }
+        let (Some(e1), Some(e2)) = (plane_elem(held, plane), plane_elem(next, plane)) else {
+            return Err(here(ProgramError::Geometry(format!(
+                "{what} needs a line or an arc in the working plane on both sides, moving in that plane"
+            ))));
+        };
+        let lines = matches!(e1, geom::Elem::Line { .. }) && matches!(e2, geom::Elem::Line { .. });
+        if !corner.round && !lines {
+            return Err(here(ProgramError::Geometry(
+                "CHF only between two straight lines (use RND next to an arc)".into(),
+            )));
+        }
+        let (keep1, cut2, inserted_centre, inserted_sweep) = if corner.round {
+            let f = geom::fillet(&e1, &e2, corner.size).map_err(|e| {
+                here(ProgramError::Geometry(match e {
+                    geom::FilletError::NoCorner => {
+                        "RND where the elements meet tangentially: there is no corner to round"
+                            .into()
+                    }
+                    geom::FilletError::TooLarge => format!(
+                        "RND R{:.4} does not fit: the rounding arc needs more than the neighbouring elements offer",
+                        corner.size
+                    ),
+                }))
+            })?;
+            (f.keep1, f.cut2, Some(f.centre), f.sweep)
         } else {
-            OpKind::Line {
-                from: t1,
-                to: t2,
-                feed: corner.feed,
+            let (l1, l2) = (elem_len(&e1), elem_len(&e2));
+            let (t1, t2) = (e1.tangent(true), e2.tangent(false));
+            let turn = (t1[0] * t2[1] - t1[1] * t2[0]).atan2(t1[0] * t2[0] + t1[1] * t2[1]);
+            if turn.abs() < 1e-9 {
+                return Err(here(ProgramError::Geometry(
+                    "CHF between two collinear lines: there is no corner".into(),
+                )));
             }
+            if corner.size > l1 + 1e-9 || corner.size > l2 + 1e-9 {
+                return Err(here(ProgramError::Geometry(format!(
+                    "CHF {:.4} mm does not fit: the lines are {:.4} and {:.4} mm",
+                    corner.size, l1, l2
+                ))));
+            }
+            (1.0 - corner.size / l1, corner.size / l2, None, 0.0)
+        };
+        // the held element ends at the first tangent (or chamfer) point
+        let end1 = trim(held, keep1, true);
+        let mut rest = next.clone();
+        let start2 = trim(&mut rest, cut2, false);
+        let inserted = match inserted_centre {
+            Some(center) => OpKind::Arc {
+                from: end1,
+                to: start2,
+                center,
+                plane,
+                sweep: inserted_sweep,
+                feed: corner.feed,
+            },
+            None => OpKind::Line {
+                from: end1,
+                to: start2,
+                feed: corner.feed,
+            },
         };
         self.last_feed = Some(corner.feed);
         out.push_back(Op {
             kind: inserted,
             loc,
         });
-        Ok(OpKind::Line {
-            from: t2,
-            to: *p2,
-            feed: *feed,
-        })
+        Ok(rest)
     }
 
     /// SPL: checks the coefficients and the start point, returns the spline op.
@@ -435,6 +426,82 @@ impl Machine {
     }
 }
 
+/// A line or arc op as a plane element; `None` for other ops, arcs in another plane and
+/// lines that do not move in the plane.
+fn plane_elem(op: &OpKind, plane: crate::op::Plane) -> Option<geom::Elem> {
+    let (a, b, _) = plane.axes();
+    match op {
+        OpKind::Line { from, to, .. } => {
+            let (f, t) = ([from[a], from[b]], [to[a], to[b]]);
+            (geom::norm(geom::sub(t, f)) > 1e-9).then_some(geom::Elem::Line { from: f, to: t })
+        }
+        OpKind::Arc {
+            from,
+            to,
+            center,
+            plane: p,
+            sweep,
+            ..
+        } if *p == plane && *sweep != 0.0 => Some(geom::Elem::Arc {
+            from: [from[a], from[b]],
+            to: [to[a], to[b]],
+            centre: *center,
+            sweep: *sweep,
+        }),
+        _ => None,
+    }
+}
+
+/// In-plane length of a line element (0 for arcs, which CHF does not take).
+fn elem_len(e: &geom::Elem) -> f64 {
+    match *e {
+        geom::Elem::Line { from, to } => geom::norm(geom::sub(to, from)),
+        geom::Elem::Arc { .. } => 0.0,
+    }
+}
+
+/// Shortens a line or arc op: keeps the part up to fraction `f` of the way (`at_end`) or
+/// drops the part before it (`!at_end`). Returns the pose at `f`; the other axes follow the
+/// element linearly (a helix stays a helix).
+fn trim(op: &mut OpKind, f: f64, at_end: bool) -> Pose {
+    match op {
+        OpKind::Line { from, to, .. } => {
+            let p = lerp(from, to, f);
+            if at_end {
+                *to = p;
+            } else {
+                *from = p;
+            }
+            p
+        }
+        OpKind::Arc {
+            from,
+            to,
+            center,
+            plane,
+            sweep,
+            ..
+        } => {
+            let (a, b, _) = plane.axes();
+            let r = geom::norm(geom::sub([from[a], from[b]], *center));
+            let start = geom::angle(geom::sub([from[a], from[b]], *center));
+            let q = geom::polar(*center, r, start + *sweep * f);
+            let mut p = lerp(from, to, f);
+            p[a] = q[0];
+            p[b] = q[1];
+            if at_end {
+                *to = p;
+                *sweep *= f;
+            } else {
+                *from = p;
+                *sweep *= 1.0 - f;
+            }
+            p
+        }
+        _ => Pose::ZERO,
+    }
+}
+
 /// The pose `s` of the way from `p` to `q`.
 fn lerp(p: &Pose, q: &Pose, s: f64) -> Pose {
     let mut out = *p;
@@ -442,4 +509,153 @@ fn lerp(p: &Pose, q: &Pose, s: f64) -> Pose {
         *o = a + (b - a) * s;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::interpreter::Interpreter;
+    use crate::op::{OpKind, Pose};
+
+    fn run(body: &str) -> Result<Vec<OpKind>, String> {
+        let src = format!("BEGIN PGM R MM\n{body}\nEND PGM R MM\n");
+        Interpreter::from_source("r.h", &src, Pose::ZERO)
+            .map(|r| r.map(|o| o.kind).map_err(|d| d.to_string()))
+            .filter(|r| !matches!(r, Ok(OpKind::End)))
+            .collect()
+    }
+
+    fn xy(p: &Pose) -> [f64; 2] {
+        [p.0[0], p.0[1]]
+    }
+
+    fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+        (a[0] - b[0]).hypot(a[1] - b[1])
+    }
+
+    fn close(a: [f64; 2], b: [f64; 2]) {
+        assert!(dist(a, b) < 1e-9, "{a:?} != {b:?}");
+    }
+
+    /// (from, to, centre, sweep) of an arc op.
+    fn arc(op: &OpKind) -> ([f64; 2], [f64; 2], [f64; 2], f64) {
+        match op {
+            OpKind::Arc {
+                from,
+                to,
+                center,
+                sweep,
+                ..
+            } => (xy(from), xy(to), *center, *sweep),
+            other => panic!("expected an arc, got {other:?}"),
+        }
+    }
+
+    fn line(op: &OpKind) -> ([f64; 2], [f64; 2]) {
+        match op {
+            OpKind::Line { from, to, .. } => (xy(from), xy(to)),
+            other => panic!("expected a line, got {other:?}"),
+        }
+    }
+
+    #[test]
+    fn rnd_between_line_and_arc() {
+        // line along +X to (10,0); arc about C=(20,0), r=10, clockwise through (20,10):
+        // the contour turns left, the rounding lies outside the arc
+        let o = run("L X-5 Y+0 F100\nL X+10 Y+0\nRND R2\nCC X+20 Y+0\nC X+30 Y+0 DR-").unwrap();
+        assert_eq!(o.len(), 4, "{o:?}");
+        let (r, big, c): (f64, f64, [f64; 2]) = (2.0, 10.0, [20.0, 0.0]);
+        // centre at height R above the line and R + r from C, on the corner side
+        let m = [c[0] - ((big + r) * (big + r) - r * r).sqrt(), r];
+        let (_, l_end) = line(&o[1]);
+        let (f_from, f_to, f_c, f_sweep) = arc(&o[2]);
+        let (a_from, a_to, a_c, _) = arc(&o[3]);
+        close(f_c, m);
+        // tangent to the line: the line ends below the centre, at distance R
+        close(l_end, [m[0], 0.0]);
+        assert!((dist(f_c, l_end) - r).abs() < 1e-9);
+        // tangent to the arc: its new start lies on the circle and on the line C–M
+        assert!((dist(a_from, c) - big).abs() < 1e-9);
+        assert!((dist(f_c, c) - (big + r)).abs() < 1e-9);
+        let along = [
+            c[0] + (m[0] - c[0]) * big / (big + r),
+            c[1] + (m[1] - c[1]) * big / (big + r),
+        ];
+        close(a_from, along);
+        close(f_from, l_end);
+        close(f_to, a_from);
+        assert!(f_sweep > 0.0 && f_sweep < 90.0, "{f_sweep}");
+        // the arc keeps its centre and end point
+        close(a_c, c);
+        close(a_to, [30.0, 0.0]);
+    }
+
+    #[test]
+    fn rnd_between_arc_and_line() {
+        // arc about the origin, r=10, counter-clockwise (10,0) -> (0,10); then a line +Y:
+        // the contour turns right, the rounding lies outside the arc
+        let o = run("L X+10 Y+0 F100\nCC X+0 Y+0\nC X+0 Y+10 DR+\nRND R2\nL X+0 Y+30").unwrap();
+        assert_eq!(o.len(), 4, "{o:?}");
+        let (r, big): (f64, f64) = (2.0, 10.0);
+        let m = [r, ((big + r) * (big + r) - r * r).sqrt()];
+        let (_, a_to, a_c, a_sweep) = arc(&o[1]);
+        let (f_from, f_to, f_c, f_sweep) = arc(&o[2]);
+        let (l_from, l_to) = line(&o[3]);
+        close(f_c, m);
+        assert!((dist(m, a_c) - (big + r)).abs() < 1e-9);
+        close(a_to, [m[0] * big / (big + r), m[1] * big / (big + r)]);
+        close(l_from, [0.0, m[1]]);
+        close(l_to, [0.0, 30.0]);
+        close(f_from, a_to);
+        close(f_to, l_from);
+        assert!(
+            f_sweep < 0.0,
+            "turning right: clockwise rounding, got {f_sweep}"
+        );
+        // the trimmed arc still turns counter-clockwise and ends at its new end point
+        let end_angle = a_sweep.to_radians();
+        close([big * end_angle.cos(), big * end_angle.sin()], a_to);
+    }
+
+    #[test]
+    fn rnd_between_two_arcs() {
+        // arc 1 about (0,0), r=10, ccw (10,0) -> (0,10); arc 2 about (10,10), r=10, cw from
+        // (0,10): the contour turns right, outside arc 1 and inside arc 2
+        let o = run(
+            "L X+10 Y+0 F100\nCC X+0 Y+0\nC X+0 Y+10 DR+\nRND R2\nCC X+10 Y+10\nC X+10 Y+20 DR-",
+        )
+        .unwrap();
+        assert_eq!(o.len(), 4, "{o:?}");
+        let r = 2.0;
+        let (_, a1_to, c1, _) = arc(&o[1]);
+        let (f_from, f_to, m, _) = arc(&o[2]);
+        let (a2_from, a2_to, c2, _) = arc(&o[3]);
+        assert!((dist(m, c1) - (10.0 + r)).abs() < 1e-9);
+        assert!((dist(m, c2) - (10.0 - r)).abs() < 1e-9);
+        assert!((dist(a1_to, c1) - 10.0).abs() < 1e-9);
+        assert!((dist(a2_from, c2) - 10.0).abs() < 1e-9);
+        assert!((dist(f_from, m) - r).abs() < 1e-9);
+        assert!((dist(f_to, m) - r).abs() < 1e-9);
+        close(f_from, a1_to);
+        close(f_to, a2_from);
+        close(a2_to, [10.0, 20.0]);
+        // the centre lies near the corner (0,10), not on the far intersection
+        assert!(dist(m, [0.0, 10.0]) < 3.0 * r);
+    }
+
+    #[test]
+    fn rnd_too_large_and_chamfer_next_to_an_arc_are_errors() {
+        let e = run("L X+9 Y+0 F100\nL X+10 Y+0\nRND R5\nCC X+20 Y+0\nC X+30 Y+0 DR-").unwrap_err();
+        assert!(
+            e.starts_with("r.h:6:1:") && e.contains("does not fit"),
+            "{e}"
+        );
+        let e = run("L X+0 Y+0 F100\nL X+10 Y+0\nCHF 1\nCC X+20 Y+0\nC X+30 Y+0 DR-").unwrap_err();
+        assert!(
+            e.starts_with("r.h:6:1:") && e.contains("CHF only between two straight lines"),
+            "{e}"
+        );
+        let e =
+            run("L X+10 Y+0 F100\nCC X+10 Y+10\nC X+20 Y+10 DR+\nRND R1\nL X+20 Y+30").unwrap_err();
+        assert!(e.contains("meet tangentially"), "{e}");
+    }
 }

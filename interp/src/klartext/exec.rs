@@ -66,6 +66,7 @@ impl LabelKey {
                     .map(|&b| char::from(b))
                     .collect(),
             ),
+            LabelRef::Qs(n) => LabelKey::Name(format!("QS{n}")),
         }
     }
 }
@@ -88,6 +89,9 @@ pub(crate) enum Flow {
     },
     /// Run another program file (CALL PGM), path as written.
     CallPgm(String),
+    /// SL cycle call: run these contour subprograms (cycle 14) in collecting mode, then
+    /// the cycle ([`Machine::finish_contours`]).
+    Contours(Vec<LabelKey>),
 }
 
 /// An execution error, located at a byte position of the block (or the block start).
@@ -169,6 +173,10 @@ pub(crate) struct Machine {
     pub(super) unit: f64,
     /// Highest position of the tool axis (M140 MB MAX), when known.
     pub retract_limit: Option<f64>,
+    /// Files the program reads and writes (FN 16 output, FN 26–28 tables).
+    pub(super) io: super::system::ProgramIo,
+    /// Cycle definitions, transforms and cycle calls.
+    pub(super) cyc: super::cycle_exec::CycleState,
 }
 
 /// An execution error located at a word of the block.
@@ -212,6 +220,8 @@ impl Machine {
             tool_base: (0.0, 0.0),
             retract_limit: None,
             unit: 1.0,
+            io: Default::default(),
+            cyc: Default::default(),
         }
     }
 
@@ -228,6 +238,7 @@ impl Machine {
     /// Notes that the op at the front of the queue was handed out.
     pub fn popped(&mut self) {
         self.held_at = self.held_at.map(|h| h.saturating_sub(1));
+        self.cyc.pre_mapped = self.cyc.pre_mapped.saturating_sub(1);
     }
 
     /// True when the front of the queue may be handed out.
@@ -338,7 +349,12 @@ impl Machine {
         out: &mut VecDeque<Op>,
     ) -> Result<Flow, ExecError> {
         let mark = out.len();
-        let r = self.exec_inner(stmt, parsed, text, loc, out);
+        let mut r = self.exec_inner(stmt, parsed, text, loc, out);
+        if r.is_ok()
+            && let Err(e) = self.check_mapping(out)
+        {
+            r = Err(e);
+        }
         if r.is_err() {
             out.truncate(mark);
         }
@@ -360,6 +376,8 @@ impl Machine {
             Stmt::Empty
                 | Stmt::Label(_)
                 | Stmt::Assign { .. }
+                | Stmt::AssignString { .. }
+                | Stmt::Table(_)
                 | Stmt::Centre
                 | Stmt::Round
                 | Stmt::Chamfer
@@ -411,6 +429,14 @@ impl Machine {
                 self.params.set(*target, v);
                 Ok(Flow::Continue)
             }
+            Stmt::AssignString { target } => {
+                self.assign_string(*target, code, text)?;
+                Ok(Flow::Continue)
+            }
+            Stmt::Table(op) => {
+                self.table_op(op, text)?;
+                Ok(Flow::Continue)
+            }
             Stmt::ToolCall => {
                 self.tool_call(&parsed.tool, text, &mut emit)?;
                 Ok(Flow::Continue)
@@ -440,6 +466,9 @@ impl Machine {
                 self.corner_request(stmt, w)?;
                 Ok(Flow::Continue)
             }
+            Stmt::CycleDef { number, sub } => self.cycle_def(*number, *sub, parsed, out, loc),
+            Stmt::CycleCall { kind } => self.cycle_call(*kind, parsed, out, loc),
+            Stmt::PatternDef => self.pattern_def(parsed),
             Stmt::Spline => {
                 let ms = MWords::classify(w)?;
                 let op = self.spline(w, &parsed.spline)?;
@@ -473,7 +502,7 @@ impl Machine {
                     .iter()
                     .map(|&b| char::from(b))
                     .collect::<String>();
-                self.print(*file, &arg);
+                self.print(*file, &arg)?;
                 Ok(Flow::Continue)
             }
             Stmt::SysRead {
@@ -525,6 +554,10 @@ impl Machine {
                             self.comp = side;
                             emit(OpKind::RadiusComp { side });
                         }
+                        if self.cyc.modal_call && w.axes_set != 0 {
+                            // M89 after a positioning block that is already there
+                            self.call_machining(&mut emit)?;
+                        }
                         if plain {
                             return Ok(Flow::Continue);
                         }
@@ -563,6 +596,11 @@ impl Machine {
         out.push_back(Op { kind: m, loc });
         if contour {
             self.held_at = Some(out.len() - 1);
+        }
+        if self.cyc.modal_call {
+            // M89: the cycle runs after every positioning block
+            let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
+            self.call_machining(&mut emit)?;
         }
         if plain {
             return Ok(Flow::Continue);
@@ -603,7 +641,7 @@ impl Machine {
     fn flow(&mut self, stmt: &Stmt, text: &[u8]) -> Result<Flow, ExecError> {
         match stmt {
             Stmt::CallLbl { label, rep } => {
-                let key = LabelKey::from_ref(*label, text);
+                let key = self.label_key(*label, text)?;
                 let rep = match rep {
                     None => None,
                     Some(v) => {
@@ -639,7 +677,7 @@ impl Machine {
                     Cond::Lt => x < y,
                 };
                 Ok(if jump {
-                    Flow::Goto(LabelKey::from_ref(*label, text))
+                    Flow::Goto(self.label_key(*label, text)?)
                 } else {
                     Flow::Continue
                 })

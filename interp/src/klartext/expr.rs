@@ -11,7 +11,14 @@
 //! atom    := number | Q n | QL n | QR n | PI | '(' sum ')' | FUNCTION unary
 //! ```
 //! Functions take their argument in degrees where angles are involved (SIN, COS, TAN; ASIN,
-//! ACOS, ATAN return degrees), as on the TNC. `%` is the remainder of the division.
+//! ACOS, ATAN return degrees), as on the TNC. `%` is the remainder of the division. The string
+//! functions that give numbers (STRLEN, INSTR, STRCOMP, TONUMB) are atoms of this grammar; see
+//! [`super::strings`].
+//!
+//! Parameters used before assignment: Q, QL and QR parameters read as 0 until a block assigns
+//! them (the TNC starts its parameters at 0 and never refuses to read one). QS string
+//! parameters are undefined until assigned: STRLEN of an undefined QS gives -1, every other
+//! use of it stops the program with "QSn is not defined".
 
 use crate::diag::ProgramError;
 
@@ -171,6 +178,10 @@ pub(crate) enum BinOp {
 }
 
 /// One postfix instruction.
+///
+/// Numeric formulas use the number stack only; string formulas (see
+/// [`super::strings`]) also use a string stack: `PushText`, `PushQs`, `Concat`, `ToChar` and
+/// `SubStr` produce strings, the other string functions produce numbers.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Rpn {
     /// Push a value.
@@ -179,14 +190,37 @@ pub(crate) enum Rpn {
     Unary(Func),
     /// Replace the two top values by an operation on them.
     Binary(BinOp),
+    /// Push the text literal at bytes `start..end` of the block text (string stack).
+    PushText(u32, u32),
+    /// Push the contents of QS n (string stack).
+    PushQs(u32),
+    /// Replace the two top strings by their concatenation (`||`).
+    Concat,
+    /// TOCHAR: pop a number (and before it the decimals when `true`), push its text.
+    ToChar(bool),
+    /// SUBSTR of QS n: pop LEN and BEG, push the substring.
+    SubStr(u32),
+    /// STRLEN of QS n: push its number of characters (-1 when QS n is undefined).
+    StrLen(u32),
+    /// STRCOMP of QS a with QS b: push -1, 0 or +1.
+    StrComp(u32, u32),
+    /// INSTR: pop BEG, push where QS b first occurs in QS a from BEG on.
+    InStr(u32, u32),
+    /// TONUMB of QS n: push the number it spells.
+    ToNumb(u32),
 }
 
-/// Parameter storage: Q, QL and QR families, zero until assigned.
+/// Parameter storage: Q, QL and QR families, zero until assigned, and the QS strings,
+/// undefined until assigned.
 #[derive(Debug, Default)]
 pub(crate) struct Params {
     q: Vec<f64>,
     ql: Vec<f64>,
     qr: Vec<f64>,
+    /// QS strings by index; `None` = never assigned.
+    pub(super) qs: Vec<Option<String>>,
+    /// QL parameters of the calling programs while a called program runs.
+    saved_ql: Vec<Vec<f64>>,
 }
 
 impl Params {
@@ -222,6 +256,20 @@ impl Params {
         }
     }
 
+    /// CALL PGM: QL parameters are local to a program, so the called program starts with
+    /// its own (all 0) and the caller's are kept aside.
+    pub fn enter_program(&mut self) {
+        let caller = std::mem::take(&mut self.ql);
+        self.saved_ql.push(caller);
+    }
+
+    /// End of a called program: the caller's QL parameters come back.
+    pub fn leave_program(&mut self) {
+        if let Some(caller) = self.saved_ql.pop() {
+            self.ql = caller;
+        }
+    }
+
     /// Resolves a word value.
     pub fn value(&self, v: Value) -> f64 {
         match v {
@@ -233,9 +281,15 @@ impl Params {
         }
     }
 
-    /// Evaluates a postfix program, using `stack` as scratch space.
-    pub fn eval(&self, code: &[Rpn], stack: &mut Vec<f64>) -> Result<f64, ProgramError> {
-        stack.clear();
+    /// Runs a postfix program on a number and a string stack; `text` is the block text the
+    /// string literals point into.
+    pub(super) fn run_code(
+        &self,
+        code: &[Rpn],
+        stack: &mut Vec<f64>,
+        strings: &mut Vec<String>,
+        text: &[u8],
+    ) -> Result<(), ProgramError> {
         for ins in code {
             match *ins {
                 Rpn::Push(v) => stack.push(self.value(v)),
@@ -248,7 +302,19 @@ impl Params {
                     let a = stack.pop().ok_or_else(malformed)?;
                     stack.push(binary(op, a, b)?);
                 }
+                other => self.string_step(other, stack, strings, text)?,
             }
+        }
+        Ok(())
+    }
+
+    /// Evaluates a postfix program, using `stack` as scratch space.
+    pub fn eval(&self, code: &[Rpn], stack: &mut Vec<f64>) -> Result<f64, ProgramError> {
+        stack.clear();
+        let mut strings = Vec::new();
+        self.run_code(code, stack, &mut strings, &[])?;
+        if !strings.is_empty() {
+            return Err(malformed());
         }
         let v = stack.pop().ok_or_else(malformed)?;
         if v.is_finite() {
@@ -261,7 +327,7 @@ impl Params {
     }
 }
 
-fn malformed() -> ProgramError {
+pub(super) fn malformed() -> ProgramError {
     ProgramError::Arithmetic("malformed formula".into())
 }
 
@@ -317,5 +383,28 @@ mod tests {
             Rpn::Binary(BinOp::Div),
         ];
         assert!(p.eval(&div0, &mut stack).is_err());
+    }
+
+    #[test]
+    fn ql_parameters_are_local_to_a_called_program() {
+        let mut p = Params::default();
+        let ql = |index| ParamRef {
+            kind: ParamKind::QL,
+            index,
+        };
+        let q = ParamRef {
+            kind: ParamKind::Q,
+            index: 1,
+        };
+        p.set(ql(5), 2.5);
+        p.set(q, 7.0);
+        p.enter_program();
+        assert_eq!(p.get(ql(5)), 0.0);
+        assert_eq!(p.get(q), 7.0);
+        p.set(ql(5), 9.0);
+        p.set(q, 8.0);
+        p.leave_program();
+        assert_eq!(p.get(ql(5)), 2.5);
+        assert_eq!(p.get(q), 8.0);
     }
 }

@@ -226,18 +226,28 @@ impl Parser {
                     self.unary(lx, depth + 1)?;
                     self.code.push(Rpn::Unary(f));
                     Ok(())
-                } else if matches!(
-                    name,
-                    b"STRLEN" | b"STRCOMP" | b"INSTR" | b"SUBSTR" | b"TONUMB" | b"TOCHAR"
-                ) {
-                    Err((
-                        t.start(),
-                        ProgramError::NotSupported(format!("string function {}", text_of(name))),
-                    ))
+                } else if matches!(name, b"STRLEN" | b"STRCOMP" | b"INSTR" | b"TONUMB") {
+                    self.string_number(lx, name, t.start())
                 } else if name == b"QS" {
                     Err((
                         t.start(),
-                        ProgramError::NotSupported("QS string parameters".into()),
+                        ProgramError::Unexpected(
+                            "string parameter QS in a number formula (convert it with TONUMB( SRC_QSn ))"
+                                .into(),
+                        ),
+                    ))
+                } else if matches!(name, b"SUBSTR" | b"TOCHAR") {
+                    Err((
+                        t.start(),
+                        ProgramError::Unexpected(format!(
+                            "{} in a number formula: it gives a text (assign it to a QS parameter)",
+                            text_of(name)
+                        )),
+                    ))
+                } else if name == b"CFGREAD" {
+                    Err((
+                        t.start(),
+                        ProgramError::NotSupported("CFGREAD (machine configuration data)".into()),
                     ))
                 } else {
                     Err(unexpected(lx, t))
@@ -246,5 +256,53 @@ impl Parser {
             TokKind::End => Err((t.start(), ProgramError::Missing("formula ends too early"))),
             _ => Err(unexpected(lx, t)),
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::interpreter::Interpreter;
+    use crate::op::{OpKind, Pose};
+
+    /// X of the single line each program moves to (`L X+Q1`).
+    fn x_of(body: &str) -> Result<f64, String> {
+        let src = format!("BEGIN PGM F MM\n{body}\nL X+Q1 F100\nEND PGM F MM\n");
+        let mut x = None;
+        for r in Interpreter::from_source("f.h", &src, Pose::ZERO) {
+            if let OpKind::Line { to, .. } = r.map_err(|d| d.to_string())?.kind {
+                x = Some(to.0[0]);
+            }
+        }
+        x.ok_or_else(|| "no motion".into())
+    }
+
+    #[test]
+    fn precedence_and_associativity() {
+        let cases: [(&str, f64); 8] = [
+            ("Q1 = 10 - 4 - 3", 3.0),
+            ("Q1 = 2 ^ 3 ^ 2", 512.0),
+            ("Q1 = -2 ^ 2", -4.0),
+            ("Q1 = 7 % 4 * 2", 6.0),
+            ("Q1 = 2 + 3 * 4 ^ 2 / 8", 8.0),
+            ("Q1 = SQRT 16 + 1", 5.0),
+            ("QS1 = \"abc\"\nQ1 = 1 + STRLEN( SRC_QS1 ) ^ 2", 10.0),
+            ("QS1 = \"abc\"\nQ1 = -STRLEN( SRC_QS1 ) * 2", -6.0),
+        ];
+        for (body, want) in cases {
+            let got = x_of(body).unwrap();
+            assert!((got - want).abs() < 1e-12, "{body}: {got} != {want}");
+        }
+    }
+
+    #[test]
+    fn continued_formula_lines() {
+        // a formula continued with `~` on the next line (as in real exports)
+        let x =
+            x_of("Q4 = 0,5\nQ1 = COS ( Q4 * 120 ) * 4 + ( 5 * ~\n    SIN ( 30 ) ) + 1").unwrap();
+        assert!((x - (0.5 * 4.0 + 2.5 + 1.0)).abs() < 1e-12, "{x}");
+        let e = x_of("Q1 = 1 + ~\n   FOO").unwrap_err();
+        assert!(e.starts_with("f.h:3:4: unexpected word 'FOO'"), "{e}");
+        let e = x_of("Q1 = 1 + NOSUCH( 2 )").unwrap_err();
+        assert!(e.starts_with("f.h:2:10:"), "{e}");
     }
 }

@@ -14,6 +14,9 @@
 //! block's motion as [`OpKind::CornerRule`] for the radius compensation stage; M6 is
 //! accepted and does nothing (TOOL CALL changes the tool). Any other M number is reported as
 //! not supported on this machine.
+//!
+//! Cycle calls: M99 calls the last defined machining cycle once, after the block's motion,
+//! and ends M89; M89 calls it after every positioning block from its own on (modal).
 
 use super::exec::{ExecError, Flow, Machine, at};
 use super::parser::Words;
@@ -34,6 +37,8 @@ pub(super) struct MWords {
     retract_pos: u32,
     shortest: Option<bool>,
     corner: Option<CornerRule>,
+    cycle_call: bool,
+    modal_call: Option<bool>,
 }
 
 impl MWords {
@@ -61,6 +66,13 @@ impl MWords {
                 98 => m.corner = Some(CornerRule::Open),
                 6 | 91 | 92 => {}
                 126 | 127 => m.shortest = Some(num == 126),
+                // M99: call the last defined cycle after this block's motion (and end M89);
+                // M89: call it after every positioning block from now on
+                99 => {
+                    m.cycle_call = true;
+                    m.modal_call = Some(false);
+                }
+                89 => m.modal_call = Some(true),
                 140 => {
                     m.retract = true;
                     m.retract_pos = pos;
@@ -75,6 +87,9 @@ impl MWords {
     pub(super) fn modal(&self, mc: &mut Machine) {
         if let Some(on) = self.shortest {
             mc.shortest_rotary = on;
+        }
+        if let Some(on) = self.modal_call {
+            mc.cyc.modal_call = on;
         }
     }
 
@@ -100,6 +115,9 @@ impl MWords {
         w: &Words,
         emit: &mut impl FnMut(OpKind),
     ) -> Result<(), ExecError> {
+        if self.cycle_call {
+            mc.call_machining(emit)?;
+        }
         if !self.retract {
             return Ok(());
         }

@@ -2,6 +2,11 @@
 //! program structure (labels, calls, jumps), system data and the tool table.
 
 pub(crate) mod contour;
+pub(crate) mod cycle;
+pub(crate) mod cycle_exec;
+pub(crate) mod cycle_pattern;
+pub(crate) mod cycle_sl;
+pub(crate) mod cycle_table;
 pub(crate) mod exec;
 pub(crate) mod expr;
 pub(crate) mod formula;
@@ -10,7 +15,10 @@ pub(crate) mod lexer;
 pub(crate) mod mfunc;
 pub(crate) mod parser;
 pub(crate) mod paths;
+pub(crate) mod strings;
 pub(crate) mod structure;
 pub(crate) mod system;
+pub(crate) mod table;
 pub(crate) mod tools;
+pub(crate) mod transform;
 pub(crate) mod words;

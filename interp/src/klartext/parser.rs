@@ -8,7 +8,7 @@
 //! before or after the number, spaces inside words, `R`/`F`/`M`/`REP` without a value (old
 //! exports: `R` alone is R0, an empty `F`, `M` or `REP` is ignored), `F MAX`, decimal commas,
 //! `* - text` headlines, `;` comments and `( … )` comment headers. Block types of later
-//! milestones (cycles, FK, PLANE, patterns, …) are recognised by their keyword and reported as
+//! milestones (FK, PLANE, …) are recognised by their keyword and reported as
 //! not supported when executed; their words are not checked yet.
 
 use super::lexer::{Lexer, TokKind, Token};
@@ -188,6 +188,14 @@ pub(crate) enum Stmt {
         /// The parameter assigned.
         target: ParamRef,
     },
+    /// `QSn = …`, `DECLARE STRING QSn = …`, `STRING FORMULA QSn = …`: the string formula
+    /// is in [`Parser::code`].
+    AssignString {
+        /// The QS parameter assigned.
+        target: u32,
+    },
+    /// `FN 26 TABOPEN`, `FN 27 TABWRITE`, `FN 28 TABREAD`.
+    Table(super::table::TableOp),
     /// A block of M words only.
     Misc,
     /// `STOP [M…]`.
@@ -271,6 +279,22 @@ pub(crate) enum Stmt {
         /// True for the polar variants (PLT, PLN, PCT, PLCT).
         polar: bool,
     },
+    /// `CYCL DEF n …`: `sub` is `None` for the current format (Q assignments in
+    /// [`Parser::cycle`]), `Some(s)` for the old-format block `n.s` (items in
+    /// [`Parser::cycle`]).
+    CycleDef {
+        /// Cycle number.
+        number: u32,
+        /// Sub-block number of the old format.
+        sub: Option<u8>,
+    },
+    /// `CYCL CALL [POS …|PAT] [F] [M…]`: words in [`Parser::words`].
+    CycleCall {
+        /// Where the cycle is called.
+        kind: super::cycle::CallKind,
+    },
+    /// `PATTERN DEF …`: elements in [`Parser::cycle`].
+    PatternDef,
     /// A block type recognised but not implemented yet.
     Unsupported {
         /// Its keyword.
@@ -287,6 +311,8 @@ pub(crate) enum LabelRef {
     Num(u32),
     /// `LBL "name"`.
     Name(u32, u32),
+    /// `LBL QSn` in a call or jump: the label named by the text of QS n.
+    Qs(u32),
 }
 
 /// The comparison of a conditional jump.
@@ -376,6 +402,8 @@ pub(crate) struct Parser {
     pub tool: ToolCall,
     /// Coefficients of the last parsed SPL block.
     pub spline: SplineWords,
+    /// Words of the last parsed cycle block (CYCL DEF, PATTERN DEF).
+    pub cycle: super::cycle::CycleWords,
 }
 
 /// Upper-cases an identifier into a small stack buffer (longer ones are cut, which makes them
@@ -697,9 +725,10 @@ impl Parser {
                 let target = param_index(lx, kind, t.start())?;
                 self.assignment(lx, target)
             }
-            b"QS" => unsupported("QS string parameters"),
+            b"QS" => self.string_assignment(lx, t.start()),
+            b"STRING" => self.string_formula(lx),
             b"CALL" => self.call(lx, t.start()),
-            b"CYCL" => unsupported("CYCL"),
+            b"CYCL" => self.cycl(lx, t.end()),
             b"APPR" => self.approach(lx, true),
             b"DEP" => self.approach(lx, false),
             b"RND" => {
@@ -721,9 +750,9 @@ impl Parser {
             b"PLANE" => unsupported("PLANE"),
             b"FUNCTION" => unsupported("FUNCTION"),
             b"TCH" => unsupported("TCH PROBE"),
-            b"DECLARE" => unsupported("DECLARE"),
+            b"DECLARE" => self.declare(lx),
             b"SEL" => unsupported("SEL"),
-            b"PATTERN" => unsupported("PATTERN"),
+            b"PATTERN" => self.pattern_def(lx.text(), t.end()),
             b"LN" => unsupported("LN"),
             b"TRANS" => unsupported("TRANS"),
             b"SYSCALL" => unsupported("SYSCALL"),

@@ -8,6 +8,7 @@ use super::parser::{
     W_AXES, W_COMP, W_FEED, W_M, W_POLAR, W_RADIUS, axis_of, describe, param_index, param_kind,
     required, set_once, text_of, unexpected, upper, value,
 };
+use super::table::TableOp;
 use super::words::split_q;
 use crate::diag::ProgramError;
 use crate::klartext::expr::Value;
@@ -33,7 +34,9 @@ impl Parser {
             TokKind::Str => Ok(LabelRef::Name(t.start() as u32, t.end() as u32)),
             TokKind::Ident if upper(lx.slice(t)).0.starts_with(b"QS") => Err((
                 t.start(),
-                ProgramError::NotSupported("labels named by QS string parameters".into()),
+                ProgramError::Unexpected(
+                    "QS label in LBL: a label is defined by a number or a quoted name".into(),
+                ),
             )),
             TokKind::End => Err((at, ProgramError::Missing("label number or name missing"))),
             _ => Err(unexpected(lx, t)),
@@ -73,7 +76,7 @@ impl Parser {
         let (u, n) = upper(lx.slice(t));
         match (t.kind, &u[..n]) {
             (TokKind::Ident, b"LBL") => {
-                let label = self.label_ref(lx, t.start())?;
+                let label = self.label_target(lx, t.start())?;
                 let mut rep = None;
                 let r = lx.next_token();
                 if r.kind == TokKind::Ident {
@@ -176,7 +179,7 @@ impl Parser {
                 if !(l.kind == TokKind::Ident && lx.slice(l).eq_ignore_ascii_case(b"LBL")) {
                     return Err((l.start(), ProgramError::Missing("expected LBL after GOTO")));
                 }
-                let label = self.label_ref(lx, l.start())?;
+                let label = self.label_target(lx, l.start())?;
                 Self::end_of_block(lx)?;
                 Ok(Stmt::Jump { a, cond, b, label })
             }
@@ -191,8 +194,17 @@ impl Parser {
                 Ok(Stmt::FnError { code })
             }
             15 | 16 => {
-                let kw = lx.next_token();
-                let (start, end) = path_range(lx, kw.end());
+                // FN 15: PRINT …, FN 16: F-PRINT … (`F`, `-`, `PRINT` as tokens)
+                if n == 16 {
+                    Self::keyword(lx, b"F")?;
+                    let dash = lx.next_token();
+                    if dash.kind != TokKind::Minus {
+                        return Err((dash.start(), ProgramError::Missing("expected F-PRINT")));
+                    }
+                }
+                Self::keyword(lx, b"PRINT")?;
+                let kw = lx.peek();
+                let (start, end) = path_range(lx, kw.start());
                 Ok(Stmt::Print {
                     file: n == 16,
                     start: start as u32,
@@ -250,6 +262,46 @@ impl Parser {
                     nr,
                     idx,
                 })
+            }
+            26 => {
+                Self::keyword(lx, b"TABOPEN")?;
+                let at = lx.peek().start();
+                let (start, end) = path_range(lx, at);
+                if start == end {
+                    return Err((at, ProgramError::Missing("TABOPEN needs the table file")));
+                }
+                Ok(Stmt::Table(TableOp::Open {
+                    start: start as u32,
+                    end: end as u32,
+                }))
+            }
+            27 => {
+                Self::keyword(lx, b"TABWRITE")?;
+                let (line, cols) = table_address(lx)?;
+                let e = lx.next_token();
+                if e.kind != TokKind::Eq {
+                    return Err((
+                        e.start(),
+                        ProgramError::Missing("expected '=' before the parameter"),
+                    ));
+                }
+                let first = table_param(lx)?;
+                Self::end_of_block(lx)?;
+                Ok(Stmt::Table(TableOp::Write { line, cols, first }))
+            }
+            28 => {
+                Self::keyword(lx, b"TABREAD")?;
+                let target = table_param(lx)?;
+                let e = lx.next_token();
+                if e.kind != TokKind::Eq {
+                    return Err((
+                        e.start(),
+                        ProgramError::Missing("expected '=' after the parameter"),
+                    ));
+                }
+                let (line, cols) = table_address(lx)?;
+                Self::end_of_block(lx)?;
+                Ok(Stmt::Table(TableOp::Read { target, line, cols }))
             }
             _ => Ok(Stmt::Unsupported {
                 what: "FN",
@@ -450,6 +502,40 @@ impl Parser {
             kind,
             polar,
         })
+    }
+}
+
+/// `line / "COL1,COL2"` of TABREAD and TABWRITE.
+fn table_address(lx: &mut Lexer<'_>) -> PResult<(Value, (u32, u32))> {
+    let p = lx.peek().start();
+    let line = required(lx, "the table line", p)?;
+    let slash = lx.next_token();
+    if slash.kind != TokKind::Slash {
+        return Err((
+            slash.start(),
+            ProgramError::Missing("expected '/' before the column names"),
+        ));
+    }
+    let c = lx.next_token();
+    if c.kind != TokKind::Str || c.start() == c.end() {
+        return Err((
+            c.start(),
+            ProgramError::Missing("expected the column names in quotes"),
+        ));
+    }
+    Ok((line, (c.start() as u32, c.end() as u32)))
+}
+
+/// The Q, QL or QR parameter of TABREAD and TABWRITE.
+fn table_param(lx: &mut Lexer<'_>) -> PResult<crate::klartext::expr::ParamRef> {
+    let q = lx.next_token();
+    let (u, n) = upper(lx.slice(q));
+    match (q.kind, param_kind(&u[..n])) {
+        (TokKind::Ident, Some(kind)) => param_index(lx, kind, q.start()),
+        _ => Err((
+            q.start(),
+            ProgramError::Missing("expected a Q, QL or QR parameter"),
+        )),
     }
 }
 

@@ -1,0 +1,199 @@
+//! Tapping: 206 TAPPING (floating tap holder), 207 RIGID TAPPING, 209 TAPPING WITH CHIP
+//! BREAKING, old cycle 2 TAPPING.
+
+use super::common::{DWELL_MAX, Hole, LEN_MAX, Params, Path, common, infeed_depths, reversed};
+use super::peck::old_feed;
+use crate::cycles::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
+use crate::op::SpindleDir;
+
+/// Refuses tapping with a floating holder when the spindle is not turning: the feed was
+/// chosen for the spindle speed and the hand of the thread follows M3/M4.
+fn need_spindle(p: &Params<'_>, ctx: &CycleContext) -> Result<(), CycleError> {
+    if ctx.spindle == SpindleDir::Off {
+        return Err(
+            p.geometry("tapping needs the spindle turning (M3 or M4) when the cycle is called")
+        );
+    }
+    Ok(())
+}
+
+/// Cycle 206 TAPPING with a floating tap holder.
+///
+/// Rapid to the set-up clearance; tap at Q206 to the depth Q201 in one move; dwell Q211;
+/// reverse the spindle and retract at Q206 to the set-up clearance; there the spindle
+/// direction is reversed again; rapid to the 2nd set-up clearance when that is larger.
+pub(super) fn tapping(
+    p: &Params<'_>,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+) -> Result<(), CycleError> {
+    let c = common(p, 201)?;
+    let feed = CycleFeed::Rate(p.cut_feed(206, "feed rate for plunging")?);
+    let dwell = p.dwell(211)?;
+    let Some(c) = c else { return Ok(()) };
+    need_spindle(p, ctx)?;
+    let mut path = Path::new(out, ctx.pos);
+    path.rapid_axis(c.safe);
+    path.axis(c.hole.at(c.hole.depth), feed);
+    path.dwell(dwell);
+    path.spindle(reversed(ctx.spindle));
+    path.axis(c.safe, feed);
+    path.spindle(ctx.spindle);
+    path.rapid_axis(c.top);
+    Ok(())
+}
+
+/// Cycle 207 RIGID TAPPING (no floating holder; the spindle is interpolated with the
+/// tool axis).
+///
+/// Rapid to the set-up clearance; the sign of the pitch Q239 gives the hand of the thread
+/// (+ right-hand: the tool enters turning clockwise, M3; − left-hand: M4). Tap to the depth
+/// Q201 in one move at one pitch per spindle revolution, reverse the spindle at the bottom
+/// and retract the same way to the set-up clearance. There the spindle returns to the
+/// direction it had at the call (the manual describes this as stopping or reversing again,
+/// depending on version; restoring the call's state covers both); rapid to the 2nd set-up
+/// clearance when that is larger. Needs a programmed spindle speed.
+///
+/// Accepted and without effect on the path: Q336 (spindle orientation angle), Q403 (speed
+/// factor for retraction).
+pub(super) fn rigid_tapping(
+    p: &Params<'_>,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+) -> Result<(), CycleError> {
+    let c = common(p, 201)?;
+    let (hand, pitch) = thread(p)?;
+    let Some(c) = c else { return Ok(()) };
+    need_speed(p, ctx)?;
+    let feed = CycleFeed::PerRev(pitch);
+    let mut path = Path::new(out, ctx.pos);
+    path.rapid_axis(c.safe);
+    if ctx.spindle != hand {
+        path.spindle(hand);
+    }
+    path.axis(c.hole.at(c.hole.depth), feed);
+    path.spindle(reversed(hand));
+    path.axis(c.safe, feed);
+    if ctx.spindle != reversed(hand) {
+        path.spindle(ctx.spindle);
+    }
+    path.rapid_axis(c.top);
+    Ok(())
+}
+
+/// Reads the pitch Q239 of a rigid tapping cycle; returns the spindle direction for
+/// entering the thread (the hand) and the pitch magnitude.
+fn thread(p: &Params<'_>) -> Result<(SpindleDir, f64), CycleError> {
+    const PITCH: &str = "-99.9999..=99.9999, not 0";
+    let pitch = p.req(239, "thread pitch", -99.9999, 99.9999, PITCH)?;
+    if pitch == 0.0 {
+        return Err(p.range_err(ParamKey::Q(239), pitch, PITCH));
+    }
+    p.opt(336, 0.0, 0.0, 360.0, "0..=360")?;
+    p.opt(403, 1.0, 0.0001, 10.0, "0.0001..=10")?;
+    let hand = if pitch > 0.0 {
+        SpindleDir::Cw
+    } else {
+        SpindleDir::Ccw
+    };
+    Ok((hand, pitch.abs()))
+}
+
+/// Refuses rigid tapping without a spindle speed: the feed is one pitch per revolution.
+fn need_speed(p: &Params<'_>, ctx: &CycleContext) -> Result<(), CycleError> {
+    if ctx.spindle_rpm.is_nan() || ctx.spindle_rpm <= 0.0 {
+        return Err(p.geometry("rigid tapping needs a spindle speed (S) when the cycle is called"));
+    }
+    Ok(())
+}
+
+/// Cycle 209 TAPPING WITH CHIP BREAKING (rigid, like 207).
+///
+/// Rapid to the set-up clearance; tap at one pitch Q239 per revolution (the sign gives the
+/// hand as in 207) by the infeed depth for chip breaking Q257 (0: the whole depth at once);
+/// reverse the spindle and back off by Q256, or, with Q256 = 0, all the way to the set-up
+/// clearance for chip removal; reverse again and tap the next infeed. At the depth Q201
+/// reverse, retract to the set-up clearance, restore the spindle direction of the call
+/// and rapid to the 2nd set-up clearance when that is larger.
+pub(super) fn tapping_chip_breaking(
+    p: &Params<'_>,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+) -> Result<(), CycleError> {
+    const LEN: &str = "0..=99999.9999";
+    let c = common(p, 201)?;
+    let infeed = p.opt(257, 0.0, 0.0, LEN_MAX, LEN)?;
+    let back = p.opt(256, 0.0, 0.0, LEN_MAX, LEN)?;
+    let (hand, pitch) = thread(p)?;
+    let Some(c) = c else { return Ok(()) };
+    need_speed(p, ctx)?;
+    let feed = CycleFeed::PerRev(pitch);
+    let step = if infeed > 0.0 { infeed } else { c.hole.depth };
+    let depths = infeed_depths(p, 0.0, c.hole.depth, step, 0.0, 0.0)?;
+    let mut path = Path::new(out, ctx.pos);
+    path.rapid_axis(c.safe);
+    if ctx.spindle != hand {
+        path.spindle(hand);
+    }
+    for (i, &d) in depths.iter().enumerate() {
+        path.axis(c.hole.at(d), feed);
+        if i + 1 == depths.len() {
+            break;
+        }
+        path.spindle(reversed(hand));
+        if back > 0.0 {
+            path.axis(c.hole.at(d - back), feed);
+        } else {
+            path.axis(c.safe, feed);
+        }
+        path.spindle(hand);
+    }
+    path.spindle(reversed(hand));
+    path.axis(c.safe, feed);
+    if ctx.spindle != reversed(hand) {
+        path.spindle(ctx.spindle);
+    }
+    path.rapid_axis(c.top);
+    Ok(())
+}
+
+/// Old cycle 2 TAPPING with a floating tap holder (`2.1` set-up clearance, `2.2` depth,
+/// `2.3` dwell, `2.4 F` feed = pitch × speed).
+///
+/// From the current position (the set-up clearance above the surface) tap at F to the
+/// depth in one move; dwell, reverse the spindle and retract at F to the starting position;
+/// there the spindle direction is reversed again.
+pub(super) fn old_tapping(
+    p: &Params<'_>,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+) -> Result<(), CycleError> {
+    const ANY: &str = "-99999.9999..=99999.9999";
+    let old = |line: u8| ParamKey::Old { line, index: 0 };
+    let clearance = p
+        .req_key(old(1), "set-up clearance", -LEN_MAX, LEN_MAX, ANY)?
+        .abs();
+    let depth = p.req_key(old(2), "total hole depth", -LEN_MAX, LEN_MAX, ANY)?;
+    let dwell = match p.raw(old(3)) {
+        Some(_) => p.req_key(old(3), "dwell time", 0.0, DWELL_MAX, "0..=3600 s")?,
+        None => 0.0,
+    };
+    let feed = CycleFeed::Rate(old_feed(p, ctx, 4)?);
+    if depth == 0.0 {
+        return Ok(());
+    }
+    need_spindle(p, ctx)?;
+    let start = ctx.pos[2];
+    let hole = Hole {
+        surface: start + depth.signum() * clearance,
+        dir: depth.signum(),
+        depth: depth.abs(),
+    };
+    let mut path = Path::new(out, ctx.pos);
+    path.axis(hole.at(hole.depth), feed);
+    path.dwell(dwell);
+    path.spindle(reversed(ctx.spindle));
+    path.axis(start, feed);
+    path.spindle(ctx.spindle);
+    Ok(())
+}

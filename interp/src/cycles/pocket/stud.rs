@@ -1,0 +1,205 @@
+//! Studs milled from the outside in: cycles 256 RECTANGULAR STUD and 257 CIRCULAR STUD.
+//!
+//! Sequence (both cycles):
+//! 1. The tool goes at rapid traverse up to the 2nd set-up clearance Q204 when it is
+//!    lower, then to the starting point beside the blank: on the first axis of the stud
+//!    (256: on the negative side of the stud turned by Q224; 257: in the direction of the
+//!    start angle Q376, measured from the first axis), the set-up clearance Q200 outside
+//!    the first ring; then down to Q200 above the surface Q203.
+//! 2. Roughing (Q215 = 0 or 1; studs without Q215 rough and finish): for each infeed of
+//!    at most Q202 down to Q201 the tool plunges at the starting point with feed Q206,
+//!    moves straight onto the first ring and runs once round it, then steps in by at most
+//!    Q370 × tool diameter to the next ring, until the ring that leaves the side allowance
+//!    Q368 on the stud; it then goes back to the starting point. The first ring takes off
+//!    the blank (Q424 × Q425 for 256, diameter Q222 for 257) no deeper than one stepover.
+//!    Rings run clockwise for climb milling (Q351 = +1 with M3: the stud lies on the
+//!    right of the travel), counter-clockwise for up-cut milling.
+//! 3. Finishing (Q215 = 0 or 2, when Q368 > 0 or Q215 = 2): at the infeeds of Q338 (all at
+//!    once when 0) one ring on the finished contour offset by the tool radius at feed Q385.
+//! 4. Rapid traverse up to the set-up clearance and to the 2nd set-up clearance.
+//!
+//! Approximation: the tool enters each ring on a straight line from outside instead of a
+//! tangential approach.
+
+use super::super::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
+use super::geom::{EPS, Frame, Path, RoundedRect, check_size, steps_down};
+use super::milled::corner_offset;
+use super::params::{Params, modal_feed, pocket_ccw};
+
+/// A stud in its frame, with the blank around it.
+struct Stud {
+    shape: RoundedRect,
+    /// How far the blank reaches beyond the finished stud at most.
+    extra: f64,
+    frame: Frame,
+}
+
+/// Cycle 256: finished sides Q218 × Q219 from blank sides Q424 × Q425, corner radius Q220,
+/// turned by Q224, placed by Q367 like cycle 251.
+pub(super) fn rect_stud(
+    p: &Params,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+) -> Result<(), CycleError> {
+    let l1 = p.q(218, "first side length")?;
+    let l2 = p.q(219, "second side length")?;
+    p.check(218, l1, EPS, f64::MAX, "greater than 0")?;
+    p.check(219, l2, EPS, f64::MAX, "greater than 0")?;
+    let b1 = p.q(424, "workpiece blank side length 1")?;
+    let b2 = p.q(425, "workpiece blank side length 2")?;
+    p.check(424, b1, l1, f64::MAX, "at least the first side length Q218")?;
+    p.check(
+        425,
+        b2,
+        l2,
+        f64::MAX,
+        "at least the second side length Q219",
+    )?;
+    let rc = p.check(
+        220,
+        p.q_or(220, 0.0),
+        0.0,
+        l1.min(l2) / 2.0,
+        "0 to half the shorter side",
+    )?;
+    let rot = p.check(224, p.q_or(224, 0.0), -360.0, 360.0, "-360 to 360")?;
+    let pos = p.choice(367, p.q_or(367, 0.0), 4, "0 to 4")?;
+    let shape = RoundedRect {
+        ha: l1 / 2.0,
+        hb: l2 / 2.0,
+        rc,
+    };
+    let turn = Frame::new([ctx.pos[0], ctx.pos[1]], rot);
+    let centre = turn.map(corner_offset(pos, shape.ha, shape.hb));
+    // Turned half a revolution so that the rings start on the negative first axis.
+    let frame = Frame::new(centre, rot + 180.0);
+    let extra = ((b1 - l1) / 2.0).max((b2 - l2) / 2.0);
+    run(
+        p,
+        ctx,
+        &Stud {
+            shape,
+            extra,
+            frame,
+        },
+        out,
+    )
+}
+
+/// Cycle 257: finished diameter Q223 from blank diameter Q222 about the tool position,
+/// starting at angle Q376 (−1 or missing: 0).
+pub(super) fn circ_stud(
+    p: &Params,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+) -> Result<(), CycleError> {
+    let d = p.q(223, "finished part diameter")?;
+    p.check(223, d, EPS, f64::MAX, "greater than 0")?;
+    let blank = p.q(222, "workpiece blank diameter")?;
+    p.check(
+        222,
+        blank,
+        d,
+        f64::MAX,
+        "at least the finished diameter Q223",
+    )?;
+    let start = p.q_or(376, 0.0);
+    let start = if start == -1.0 {
+        0.0
+    } else {
+        p.check(376, start, -360.0, 360.0, "-360 to 360")?
+    };
+    let shape = RoundedRect {
+        ha: d / 2.0,
+        hb: d / 2.0,
+        rc: d / 2.0,
+    };
+    let frame = Frame::new([ctx.pos[0], ctx.pos[1]], start);
+    run(
+        p,
+        ctx,
+        &Stud {
+            shape,
+            extra: (blank - d) / 2.0,
+            frame,
+        },
+        out,
+    )
+}
+
+/// The common sequence.
+fn run(p: &Params, ctx: &CycleContext, stud: &Stud, out: &mut Vec<Move>) -> Result<(), CycleError> {
+    let op = p.choice(215, p.q_or(215, 0.0), 2, "0, 1 or 2")?;
+    let depth = p.q(201, "depth")?;
+    if depth > 0.0 {
+        return Err(p.range(ParamKey::Q(201), depth, "negative (0 skips the cycle)"));
+    }
+    let surface = p.q(203, "workpiece surface coordinate")?;
+    let infeed = p.q(202, "plunging depth")?;
+    p.check(202, infeed, EPS, f64::MAX, "greater than 0")?;
+    let finish_infeed = p.check(338, p.q_or(338, 0.0), 0.0, f64::MAX, "0 or more")?;
+    let clear = p.check(200, p.q_or(200, 2.0), 0.0, f64::MAX, "0 or more")?;
+    let clear2 = p
+        .check(204, p.q_or(204, 50.0), 0.0, f64::MAX, "0 or more")?
+        .max(clear);
+    let side = p.check(368, p.q_or(368, 0.0), 0.0, f64::MAX, "0 or more")?;
+    let overlap = p.check(370, p.q_or(370, 1.0), 0.1, 1.9999, "0.1 to 1.9999")?;
+    let ccw = !pocket_ccw(p.q_or(351, 1.0), ctx.spindle);
+    let f_mill = p.feed_or(207, modal_feed(ctx))?;
+    let f_plunge = p.feed_or(206, f_mill)?;
+    let f_finish = p.feed_or(385, f_mill)?;
+    if depth == 0.0 {
+        return Ok(());
+    }
+    let r = ctx.tool_radius;
+    if !(r.is_finite() && r > 0.0) {
+        return Err(p.geometry(format!("tool radius {r} is not usable")));
+    }
+    let step = overlap * 2.0 * r;
+    let material = (stud.extra - side).max(0.0);
+    let n = (material / step - 1e-9).ceil().clamp(1.0, 100_000.0);
+    // n is a small positive whole number.
+    let count = n as usize;
+    let rings: Vec<RoundedRect> = (1..=count)
+        .map(|k| {
+            stud.shape
+                .offset(r + side + material * (count - k) as f64 / n)
+        })
+        .collect();
+    let fin = stud.shape.offset(r);
+    let reach = rings.first().map_or(fin.ha, |g| g.ha).max(fin.ha);
+    let start = [reach + clear, 0.0];
+
+    let mut path = Path::new(out, stud.frame, ctx.pos);
+    let top = surface + clear;
+    let safe = surface + clear2;
+    let bottom = surface + depth;
+    if ctx.pos[2] < safe {
+        path.line_abs([ctx.pos[0], ctx.pos[1], safe], CycleFeed::Rapid);
+    }
+    path.line(start, ctx.pos[2].max(safe), CycleFeed::Rapid);
+    path.line(start, top, CycleFeed::Rapid);
+    let levels = steps_down(surface, bottom, infeed);
+    check_size(p.cycle, 10.0 * (levels.len() * (rings.len() + 1)) as f64)?;
+    let finish_levels = steps_down(surface, bottom, finish_infeed);
+    check_size(p.cycle, 10.0 * finish_levels.len() as f64)?;
+    if op != 2 {
+        for z in levels {
+            path.line(start, z, f_plunge);
+            for ring in &rings {
+                path.ring(*ring, ccw, z, f_mill);
+            }
+            path.line(start, z, f_mill);
+        }
+    }
+    if op != 1 && (side > 0.0 || op == 2) {
+        for z in finish_levels {
+            path.line(start, z, f_plunge);
+            path.ring(fin, ccw, z, f_finish);
+            path.line(start, z, f_finish);
+        }
+    }
+    path.line(start, top, CycleFeed::Rapid);
+    path.line(start, safe, CycleFeed::Rapid);
+    Ok(())
+}

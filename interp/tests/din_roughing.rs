@@ -1,0 +1,110 @@
+//! G810/G820 roughing cuts against cut lengths worked out by hand from the contour and the
+//! bar blank.
+
+use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
+
+fn program() -> Vec<Op> {
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../programs/lathe/roughing_g810_g820.nc");
+    let text = std::fs::read_to_string(p).unwrap();
+    Interpreter::from_source("r.nc", &text, Pose::ZERO)
+        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
+        .collect()
+}
+
+/// (from, to) of the feed moves at `f` mm/rev, as (z, x radius) pairs.
+fn cuts(ops: &[Op], f: f64) -> Vec<([f64; 2], [f64; 2])> {
+    ops.iter()
+        .filter_map(|o| match o.kind {
+            OpKind::Line { from, to, feed } if feed == Feed::PerRevolution(f) => Some((
+                [from[AxisLetter::Z], from[AxisLetter::X]],
+                [to[AxisLetter::Z], to[AxisLetter::X]],
+            )),
+            _ => None,
+        })
+        .collect()
+}
+
+#[track_caller]
+fn near(a: [f64; 2], b: [f64; 2]) {
+    assert!(
+        (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
+        "{a:?} != {b:?}"
+    );
+}
+
+#[test]
+fn g810_cuts_parallel_to_z_end_on_the_contour() {
+    let ops = program();
+    let c = cuts(&ops, 0.3);
+    // blank radius 30 down to the contour's smallest radius 0: 30 mm in ceil(30/4) = 8
+    // equal cuts of 3.75; each starts at the start Z3 and ends where the line x = r meets
+    // the contour first: r 26.25 meets the shoulder at Z-60, r 22.5 the cone
+    // (Z-30, r20)–(Z-40, r25) at Z-35, the others the face at Z0
+    let expect_end = [-60.0, -35.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+    assert_eq!(c.len(), 8, "{c:?}");
+    for (i, ((from, to), z)) in c.iter().zip(expect_end).enumerate() {
+        let r = 30.0 - 3.75 * (i as f64 + 1.0);
+        near(*from, [3.0, r]);
+        near(*to, [z, r]);
+    }
+}
+
+#[test]
+fn g820_cuts_parallel_to_x_keep_the_allowances() {
+    let ops = program();
+    let c = cuts(&ops, 0.25);
+    // allowances: I1 (diameter) → 0.5 mm on radii, K0.5 towards the front. The shifted
+    // contour ends at Z-59.5, the blank front is Z1: 60.5 mm in ceil(60.5/5) = 13 cuts.
+    let step = 60.5 / 13.0;
+    // the shifted contour's radius at Z (r + 0.5, Z + 0.5)
+    let radius = |z: f64| {
+        let z = z - 0.5;
+        if z >= -30.0 {
+            20.5
+        } else if z >= -40.0 {
+            20.5 + (-30.0 - z) / 10.0 * 5.0
+        } else {
+            25.5
+        }
+    };
+    assert_eq!(c.len(), 13, "{c:?}");
+    for (i, (from, to)) in c.iter().enumerate() {
+        let z = 1.0 - step * (i as f64 + 1.0);
+        // from the start radius 32 (X64) inwards
+        near(*from, [z, 32.0]);
+        near(*to, [z, radius(z)]);
+    }
+    // after both cycles the tool is back at the start point X64 Z3 before G890
+    let before_finish = ops
+        .iter()
+        .rposition(
+            |o| matches!(o.kind, OpKind::Line { feed, .. } if feed == Feed::PerRevolution(0.25)),
+        )
+        .unwrap();
+    let back = ops[before_finish..].iter().find_map(|o| match o.kind {
+        OpKind::Line {
+            to,
+            feed: Feed::Rapid,
+            ..
+        } if to[AxisLetter::X] == 32.0 && to[AxisLetter::Z] == 3.0 => Some(to),
+        _ => None,
+    });
+    assert!(back.is_some());
+}
+
+#[test]
+fn roughing_errors() {
+    let text = "BLANK\nN1 G20 X60 Z80 K1\nFINISHED PART\nN2 G0 X0 Z0\nN3 G1 X40\n\
+                MACHINING\nN10 G95 F0.2\nN11 G0 X20 Z-5\nN12 G810 P2\nEND\n";
+    let d = Interpreter::from_source("bad.nc", text, Pose::ZERO)
+        .find_map(|r| r.err())
+        .expect("a diagnostic");
+    assert_eq!((d.line, d.col), (9, 5), "{d}");
+    assert!(d.message.contains("inside the blank"), "{d}");
+    let text = "MACHINING\nN10 G95 F0.2\nN11 G0 X80 Z5\nN12 G810 P2\nEND\n";
+    let d = Interpreter::from_source("bad.nc", text, Pose::ZERO)
+        .find_map(|r| r.err())
+        .expect("a diagnostic");
+    assert!(d.message.contains("FINISHED PART"), "{d}");
+}

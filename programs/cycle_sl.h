@@ -1,0 +1,49 @@
+0  BEGIN PGM CYCLE_SL MM
+; SL cycles: cycle 14 names the contour subprograms (LBL 1 the pocket: clockwise with RR, the
+; tool inside; LBL 2 an island: counter-clockwise with RR, the tool outside), cycle 20 the
+; contour data, cycle 22 roughs the pocket around the island, cycle 24 finishes the walls.
+1  BLK FORM 0.1 Z X+0 Y+0 Z-20
+2  BLK FORM 0.2 X+100 Y+100 Z+0
+3  TOOL DEF 1 L+60 R+4
+4  TOOL CALL 1 Z S3000 F500
+5  L Z+50 R0 FMAX M3
+6  CYCL DEF 14.0 CONTOUR
+7  CYCL DEF 14.1 CONTOUR LABEL1 /2
+8  CYCL DEF 20 CONTOUR DATA ~
+    Q1=-6      ;MILLING DEPTH ~
+    Q2=+1      ;TOOL PATH OVERLAP ~
+    Q3=+0.2    ;ALLOWANCE FOR SIDE ~
+    Q4=+0      ;ALLOWANCE FOR FLOOR ~
+    Q5=+0      ;SURFACE COORDINATE ~
+    Q6=+2      ;SET-UP CLEARANCE ~
+    Q7=+50     ;CLEARANCE HEIGHT ~
+    Q8=+0      ;ROUNDING RADIUS ~
+    Q9=+1      ;ROTATIONAL DIRECTION
+9  CYCL DEF 22 ROUGH-OUT ~
+    Q10=-3     ;PLUNGING DEPTH ~
+    Q11=+150   ;FEED RATE FOR PLNGNG ~
+    Q12=+500   ;FEED RATE F. ROUGHNG ~
+    Q18=+0     ;COARSE ROUGHING TOOL ~
+    Q19=+0     ;FEED RATE FOR RECIP.
+10 CYCL CALL
+11 CYCL DEF 24 SIDE FINISHING ~
+    Q9=+1      ;ROTATIONAL DIRECTION ~
+    Q10=-3     ;PLUNGING DEPTH ~
+    Q11=+150   ;FEED RATE FOR PLNGNG ~
+    Q12=+400   ;FEED RATE F. ROUGHNG ~
+    Q14=+0     ;ALLOWANCE FOR SIDE
+12 CYCL CALL
+13 L Z+50 R0 FMAX M30
+14 LBL 1
+15 L X+10 Y+10 RR
+16 L X+10 Y+70
+17 L X+80 Y+70
+18 L X+80 Y+10
+19 L X+10 Y+10
+20 LBL 0
+21 LBL 2
+22 CC X+45 Y+40
+23 L X+55 Y+40 RR
+24 C X+55 Y+40 DR+
+25 LBL 0
+26 END PGM CYCLE_SL MM
