@@ -10,7 +10,7 @@ use klar_drivers::modbus::{ModbusServoConfig, ModbusVfdConfig};
 use klar_drivers::stepdir::StepDirConfig;
 use klar_interp::{AxisLetter, Diagnostic, Interpreter, Pose, Tool, ToolTable};
 use klar_motion::AxisLimits;
-use klar_motion::kinematics::{Cartesian, Kinematics, Lathe};
+use klar_motion::kinematics::{Cartesian, Kinematics, Lathe, TableTable, TiltAxis};
 use klar_sim::plant::SimAxisParams;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -133,6 +133,23 @@ pub enum KinematicsConfig {
     /// A turning centre: X (radius), Z, C main spindle, Y, B tool tilt; without a Y axis a
     /// point off the X axis is reached by turning C.
     Lathe,
+    /// A 5-axis mill whose workpiece sits on a rotary table C carried by a tilting cradle A
+    /// or B (whichever of the two the machine lists); pivots in `[table_table]`.
+    #[serde(rename = "table_table")]
+    TableTable,
+}
+
+/// Where the rotary axes of a table-table machine lie (machine coordinates, mm, at zero
+/// angles): the tilt axis passes through `tilt_pivot`, the table axis through `table_pivot`.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TableTableConfig {
+    /// A point on the tilt axis (A parallel to X, or B parallel to Y).
+    #[serde(default)]
+    pub tilt_pivot: [f64; 3],
+    /// A point on the table axis C (parallel to Z at zero tilt).
+    #[serde(default)]
+    pub table_pivot: [f64; 3],
 }
 
 /// A spindle motor simulated inside klar: its speed ramps at `acceleration`.
@@ -233,6 +250,9 @@ pub struct MachineConfig {
     /// Kinematics.
     #[serde(default)]
     pub kinematics: KinematicsConfig,
+    /// Pivots of a table-table machine (`kinematics = "table_table"`; zero when absent).
+    #[serde(default)]
+    pub table_table: TableTableConfig,
     /// The axes, in machine order (trace columns follow this order).
     #[serde(rename = "axis")]
     pub axes: Vec<AxisConfig>,
@@ -336,6 +356,9 @@ pub const BUILTIN_MILL: &str = include_str!("../machines/mill.toml");
 /// The built-in simulated turning centre (X Z C Y B), used for lathe DIN programs.
 pub const BUILTIN_LATHE: &str = include_str!("../machines/lathe.toml");
 
+/// The built-in simulated 5-axis table-table mill (X Y Z A C), for PLANE and M128 programs.
+pub const BUILTIN_MILL5: &str = include_str!("../machines/mill5.toml");
+
 impl MachineConfig {
     /// Reads and validates a machine file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
@@ -381,6 +404,15 @@ impl MachineConfig {
     /// The built-in simulated lathe.
     pub fn builtin_lathe() -> Self {
         match Self::parse("built-in lathe", BUILTIN_LATHE) {
+            Ok(c) => c,
+            // The built-in file is part of the binary and covered by a test.
+            Err(e) => unreachable!("built-in machine is invalid: {e}"),
+        }
+    }
+
+    /// The built-in simulated 5-axis table-table mill (X Y Z A C).
+    pub fn builtin_mill5() -> Self {
+        match Self::parse("built-in 5-axis mill", BUILTIN_MILL5) {
             Ok(c) => c,
             // The built-in file is part of the binary and covered by a test.
             Err(e) => unreachable!("built-in machine is invalid: {e}"),
@@ -435,7 +467,8 @@ impl MachineConfig {
 
     /// Opens a program for this machine: the interpreter with the machine's tool table.
     pub fn open_program(&self, program: &Path, start: Pose) -> Result<Interpreter, Diagnostic> {
-        let interp = Interpreter::open(program, start)?;
+        // PLANE and cycle 19 compute angles for the machine's rotary axes.
+        let interp = Interpreter::open(program, start)?.with_rotary_axes(&self.letters());
         Ok(match self.tool_table() {
             Ok(Some(table)) => interp.with_tools(table),
             // A bad table file was refused when the machine file was loaded.
@@ -449,6 +482,15 @@ impl MachineConfig {
         match self.kinematics {
             KinematicsConfig::Cartesian => Box::new(Cartesian::new(&letters)),
             KinematicsConfig::Lathe => Box::new(Lathe::new(&letters)),
+            KinematicsConfig::TableTable => {
+                let tilt = if letters.contains(&AxisLetter::B) {
+                    TiltAxis::B
+                } else {
+                    TiltAxis::A
+                };
+                let t = &self.table_table;
+                Box::new(TableTable::new(&letters, tilt, t.tilt_pivot, t.table_pivot))
+            }
         }
     }
 
@@ -470,6 +512,20 @@ impl MachineConfig {
         positive("tolerance", self.tolerance)?;
         if self.axes.is_empty() {
             return Err("a machine needs at least one [[axis]]".into());
+        }
+        if self.kinematics == KinematicsConfig::TableTable {
+            let has = |l: AxisLetter| self.axes.iter().any(|a| a.letter == l);
+            let tilts = usize::from(has(AxisLetter::A)) + usize::from(has(AxisLetter::B));
+            if !has(AxisLetter::C) || tilts != 1 {
+                return Err("kinematics table_table needs a C axis and one of A or B".into());
+            }
+            let pivots = self.table_table.tilt_pivot.iter();
+            if pivots
+                .chain(&self.table_table.table_pivot)
+                .any(|v| !v.is_finite())
+            {
+                return Err("table_table pivots must be finite numbers".into());
+            }
         }
         for (i, a) in self.axes.iter().enumerate() {
             let l = a.letter;

@@ -157,6 +157,8 @@ pub struct Run<'a, 'w> {
     letters: Vec<AxisLetter>,
     travel: Vec<[f64; 2]>,
     kin: Box<dyn Kinematics>,
+    /// TCPM is on: the velocity and acceleration feed-forward go through the kinematics.
+    tcpm: bool,
     io: MachineIo,
     ops: OpStream,
     planner: Planner,
@@ -361,12 +363,26 @@ impl Run<'_, '_> {
         }
         self.line = sample.loc.line;
         self.kin.to_machine(&sample.pose, &mut self.commanded);
+        // Under TCPM the machine rates are the kinematics' Jacobian applied to the program
+        // rates (the acceleration without the Jacobian's own rate of change).
+        let (mut vel, mut acc) = ([0.0; 9], [0.0; 9]);
+        if self.tcpm {
+            self.kin
+                .rates_to_machine(&sample.pose, &sample.velocity, &mut vel);
+            self.kin
+                .rates_to_machine(&sample.pose, &sample.acceleration, &mut acc);
+        }
         for (i, sp) in self.io.setpoints_mut().iter_mut().enumerate() {
             let l = self.letters[i];
+            let (v, a) = if self.tcpm {
+                (vel.get(i).copied(), acc.get(i).copied())
+            } else {
+                (None, None)
+            };
             *sp = Setpoint {
                 position: self.commanded[i],
-                velocity: sample.velocity[l.index()],
-                acceleration: sample.acceleration[l.index()],
+                velocity: v.unwrap_or(sample.velocity[l.index()]),
+                acceleration: a.unwrap_or(sample.acceleration[l.index()]),
             };
         }
         self.servo_cycle(sample.t + self.shift)
@@ -411,6 +427,13 @@ impl Run<'_, '_> {
                 dir,
                 speed,
             } => self.spindle_command(op.loc, *dir, *speed),
+            OpKind::Tcpm { on } => {
+                // From here on X Y Z of the samples are the tool tip on the workpiece (on) or
+                // the machine's own X Y Z (off).
+                self.kin.set_tcpm(*on);
+                self.tcpm = *on;
+                Ok(())
+            }
             OpKind::Stop { optional } => {
                 // A run without an operator cannot wait for a restart: it logs and goes on.
                 tracing::info!(
@@ -655,6 +678,7 @@ impl<'a, 'w> Run<'a, 'w> {
             config,
             travel: config.axes.iter().map(|a| a.travel).collect(),
             kin,
+            tcpm: false,
             io,
             ops,
             planner,

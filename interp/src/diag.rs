@@ -210,4 +210,21 @@ pub enum ProgramError {
     /// become an ellipse, …).
     #[error("{0}")]
     Transform(String),
+    /// A tilted working plane that cannot be set up (missing rotary axes, degenerate data).
+    #[error("{0}")]
+    Plane(String),
+    /// FK data that leave several solutions and no FSELECT picks one.
+    #[error("FK: {count} solutions for blocks {blocks}: add FSELECT")]
+    FkAmbiguous {
+        /// How many solutions were found.
+        count: usize,
+        /// The blocks concerned, e.g. `12–14`.
+        blocks: String,
+    },
+    /// FK elements still not determined when the FK section ends.
+    #[error("FK: blocks {0} are under-determined: the contour needs more data")]
+    FkUnderdetermined(String),
+    /// FK data that no contour satisfies.
+    #[error("FK: the data of block {0} contradict the contour before it")]
+    FkContradiction(String),
 }

@@ -268,6 +268,14 @@ impl Interpreter {
         self
     }
 
+    /// Tells the interpreter the machine's axes: PLANE and cycle 19 need a tilt axis (A or
+    /// B) and a table axis C, and compute their angles for them (an interpreter never told
+    /// assumes an A/C table).
+    pub fn with_rotary_axes(mut self, axes: &[crate::op::AxisLetter]) -> Self {
+        self.machine.set_rotary_axes(axes);
+        self
+    }
+
     /// Uses `table` for datum shifts from a datum table (`CYCL DEF 7.1 #n`).
     pub fn with_datum_table(mut self, table: DatumTable) -> Self {
         self.machine.set_datum_table(table);
@@ -754,12 +762,16 @@ impl Interpreter {
 
     /// Hands out the queued ops that can no longer change.
     fn pop_ready(&mut self) -> Option<Op> {
+        if let Some(op) = self.machine.tilt_pending() {
+            return Some(op);
+        }
         if !self.machine.front_ready() {
             return None;
         }
         let op = self.queue.pop_front()?;
         // ops leave in machine coordinates (datum shift, mirror, rotation, scaling)
         let op = self.machine.output(op);
+        let op = self.machine.tilt_output(op); // then the tilted working plane
         self.machine.popped();
         Some(op)
     }

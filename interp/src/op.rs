@@ -459,6 +459,14 @@ pub enum OpKind {
         /// True when the spindle becomes the C axis.
         on: bool,
     },
+    /// Tool centre point management on or off (M128/M129, FUNCTION TCPM, a tilted working
+    /// plane): while on, X Y Z of the following poses are the tool tip in workpiece
+    /// coordinates and the kinematics keeps it there as rotary axes that carry the workpiece
+    /// turn; while off, X Y Z pass to the machine unchanged.
+    Tcpm {
+        /// True for on.
+        on: bool,
+    },
     /// Program stop (M0, STOP) or optional stop (M1): motion halts until resumed.
     Stop {
         /// True for M1 (only when optional stop is switched on).

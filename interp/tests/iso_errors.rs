@@ -56,10 +56,12 @@ fn bad_values_and_unsupported_functions() {
     assert_eq!((d.line, d.col), (2, 13), "{d}");
     let (_, d) = until_error("%A G71 *\nN10 G01 X *\n");
     assert_eq!((d.line, d.col), (2, 9), "{d}");
-    let (_, d) = until_error("%A G71 *\nN10 G28 X *\n");
+    let (_, d) = until_error("%A G71 *\nN10 G01 Y+1 X F100 *\n");
     assert!(d.message.contains("missing value"), "{d}");
+    // G28 lists the mirrored axes without values
     let (_, d) = until_error("%A G71 *\nN10 G28 X+0 *\n");
     assert!(d.message.contains("mirror"), "{d}");
+    assert_eq!((d.line, d.col), (2, 9), "{d}");
     let (_, d) = until_error("%A G71 *\nN10 G02 X+5 Y+0 F100 *\n");
     assert!(d.message.contains("CC"), "{d}");
     let (_, d) = until_error("%A G71 *\nN10 G01 X+5 F100 *\nN20 G02 X+0 R+1 *\n");

@@ -33,6 +33,8 @@ pub(crate) struct IsoWord {
     pub value: Value,
     /// The number after a comma (`L1,3`), if any.
     pub count: Option<f64>,
+    /// An axis letter written without a value (`G28 X Y`: the mirrored axes); `value` is 0.
+    pub bare: bool,
     /// Byte position of the word in the block text.
     pub pos: u32,
 }
@@ -51,6 +53,14 @@ pub(crate) enum IsoKind {
     Words,
     /// A `Q… = formula` assignment: the Klartext parser reads it.
     Formula,
+    /// `G2nn NAME Q…=… ;comment …`: a cycle definition; the `Q…=` assignments follow
+    /// the number from byte `after` on, on this line or on the next lines.
+    CycleDef {
+        /// The cycle number.
+        number: u32,
+        /// Byte position just after the number.
+        after: usize,
+    },
 }
 
 /// One parsed ISO block.
@@ -158,6 +168,10 @@ impl IsoBlock {
             self.kind = IsoKind::Formula;
             return Ok(());
         }
+        if let Some((number, after)) = cycle_head(body, i) {
+            self.kind = IsoKind::CycleDef { number, after };
+            return Ok(());
+        }
         self.kind = IsoKind::Words;
         while i < body.len() {
             skip_blank(body, &mut i);
@@ -211,6 +225,21 @@ impl IsoBlock {
                     addr,
                     value,
                     count: Some(index),
+                    bare: false,
+                    pos: at as u32,
+                })?;
+                continue;
+            }
+            let bare = matches!(addr, Addr::Letter(b'X' | b'Y' | b'Z' | b'U' | b'V' | b'W'))
+                && body
+                    .get(i)
+                    .is_none_or(|b| *b == b' ' || *b == b'\t' || *b == b'\r' || *b == b'\n');
+            if bare {
+                self.push(IsoWord {
+                    addr,
+                    value: Value::Num(0.0),
+                    count: None,
+                    bare: true,
                     pos: at as u32,
                 })?;
                 continue;
@@ -228,6 +257,7 @@ impl IsoBlock {
                 addr,
                 value,
                 count,
+                bare: false,
                 pos: at as u32,
             })?;
         }
@@ -271,6 +301,24 @@ impl IsoBlock {
         self.kind = IsoKind::Header { inch };
         Ok(())
     }
+}
+
+/// `G<n>` with n ≥ 200 at `i`, followed by a blank, a name or the end: the head of a cycle
+/// definition. Returns the number and the position after it.
+fn cycle_head(body: &[u8], i: usize) -> Option<(u32, usize)> {
+    if !body.get(i)?.eq_ignore_ascii_case(&b'G') {
+        return None;
+    }
+    let mut j = i + 1;
+    let mut n: u32 = 0;
+    while let Some(d) = body.get(j).filter(|b| b.is_ascii_digit()) {
+        n = n.checked_mul(10)?.checked_add(u32::from(d - b'0'))?;
+        j += 1;
+    }
+    let ends = body
+        .get(j)
+        .is_none_or(|b| b.is_ascii_whitespace() || b.is_ascii_alphabetic());
+    (j > i + 1 && n >= 200 && ends).then_some((n, j))
 }
 
 /// True when the text at `i` reads `Q…n =` / `QL…n =` / `QR…n =`.
@@ -404,9 +452,36 @@ mod tests {
     }
 
     #[test]
+    fn cycle_definition_heads() {
+        assert_eq!(
+            parse("N70 G200 BOHREN").kind,
+            IsoKind::CycleDef {
+                number: 200,
+                after: 8
+            }
+        );
+        assert_eq!(
+            parse("G221 Q225=+10 *").kind,
+            IsoKind::CycleDef {
+                number: 221,
+                after: 4
+            }
+        );
+        // below 200 and G words further on are ordinary words
+        assert_eq!(parse("N10 G01 X+5 *").kind, IsoKind::Words);
+        assert_eq!(parse("N10 G79 M99 *").kind, IsoKind::Words);
+        assert_eq!(parse("N10 X+1 G200 *").kind, IsoKind::Words);
+    }
+
+    #[test]
     fn bad_words_are_located() {
         let mut b = IsoBlock::default();
-        let e = b.parse(b"N10 G01 X *").unwrap_err();
+        // an axis without a value is kept as a bare word (G28 X Y); the executor refuses
+        // it elsewhere
+        b.parse(b"N10 G28 X Y *").unwrap();
+        assert!(b.words[1].bare && b.words[2].bare && !b.words[0].bare);
+        assert_eq!(b.words[1].pos, 8);
+        let e = b.parse(b"N10 G01 F *").unwrap_err();
         assert_eq!(e.0, 8);
         let e = b.parse(b"N10 G01 XX5 *").unwrap_err();
         assert_eq!(e.0, 8);

@@ -10,6 +10,14 @@
 //! coordinates, the pole and the polar values (modal). G40/G41/G42 → R0/RL/RR. `T n G17 S…`
 //! → `TOOL CALL n Z S…` (G18 → Y, G19 → X; DL/DR deltas); G99 `T n L… R…` → `TOOL DEF n
 //! L… R…`. G30/G31 → BLK FORM 0.1/0.2.
+//! G43/G44 → `R+`/`R-` in that block: the one-axis move is lengthened (G43) or shortened
+//! (G44) by the tool radius. G26 R… / G27 R… (tangential approach / departure on an arc of
+//! radius R) are blocks of their own: G26 follows the block of the first contour point (the
+//! first block with G41/G42), G27 the block of the last contour element; both round the
+//! corner between the uncompensated approach (departure) line and that contour element
+//! with a tangent arc of radius R, which is `RND R…` at the same place in Klartext.
+//! Transformations (G28, G53, G54, G72, G73, G80), cycle definitions (`G2nn`) and the cycle
+//! call G79 are in [`super::cycles`].
 //! D00–D08 and D13 are FN 0–8/13 (`D01 Q6 P01 +Q5 P02 +Q108`), D09–D12 the conditional
 //! jumps FN 9–12 to a G98 label. G04 F… dwells F seconds, G38 stops. M functions act as in
 //! Klartext.
@@ -51,6 +59,8 @@ struct BlockFlags {
     stop: bool,
     /// The block calls a tool (T).
     tool_call: bool,
+    /// G43 (true: lengthen) / G44 (false: shorten) with the word position.
+    paraxial: Option<(bool, u32)>,
 }
 
 /// The modal motion G code.
@@ -81,7 +91,9 @@ pub(crate) struct IsoState {
     /// Direction of the last arc: true for counter-clockwise.
     last_ccw: Option<bool>,
     /// Tool axis chosen by the last G17/G18/G19.
-    axis: AxisLetter,
+    pub(super) axis: AxisLetter,
+    /// A cycle definition whose `Q…=` lines are still being read.
+    pub(super) open_cycle: Option<super::cycles::OpenCycle>,
 }
 
 pub(super) fn err(pos: u32, e: ProgramError) -> ExecError {
@@ -110,22 +122,35 @@ pub(super) fn code(w: &IsoWord, what: &str) -> Result<u32, ExecError> {
 fn unsupported_g(g: u32) -> Option<&'static str> {
     Some(match g {
         7 => "G07 paraxial positioning",
-        26 => "G26 tangential approach",
-        27 => "G27 tangential departure",
-        28 => "G28 mirror image",
-        43 | 44 => "G43/G44 paraxial radius compensation",
         51 => "G51 next tool",
-        53 | 54 => "G53/G54 datum shift",
-        72 => "G72 scaling",
-        73 => "G73 rotation",
-        79 => "G79 cycle call",
-        80 => "G80 tilted working plane",
         _ if (37..=39).contains(&g) || (55..=59).contains(&g) || (74..=78).contains(&g) => {
             "old HEIDENHAIN ISO cycles"
         }
-        _ if (83..=89).contains(&g) || g >= 200 => "ISO cycles",
+        _ if (85..=89).contains(&g) => "old HEIDENHAIN ISO cycles",
+        _ if g >= 200 => "a cycle definition G2nn after other words (it starts its block)",
         _ => return None,
     })
+}
+
+/// Copies the M words of a block into Klartext words; returns how many there are.
+pub(super) fn m_words(b: &IsoBlock, words: &mut Words) -> Result<usize, ExecError> {
+    let mut n_m = 0usize;
+    for w in b.words.iter().filter(|w| letter(w) == Some(b'M')) {
+        let m = code(w, "M")?;
+        if n_m >= MAX_M {
+            return Err(err(
+                w.pos,
+                ProgramError::OutOfRange(format!("more than {MAX_M} M words in one block")),
+            ));
+        }
+        if let (Some(slot), Some(p)) = (words.m.get_mut(n_m), words.m_pos.get_mut(n_m)) {
+            *slot = m;
+            *p = w.pos;
+        }
+        n_m += 1;
+    }
+    words.m_count = n_m as u8;
+    Ok(n_m)
 }
 
 impl IsoState {
@@ -138,7 +163,13 @@ impl IsoState {
             incremental: false,
             last_ccw: None,
             axis: AxisLetter::Z,
+            open_cycle: None,
         }
+    }
+
+    /// True while G91 (incremental input) is active.
+    pub(super) fn incremental(&self) -> bool {
+        self.incremental
     }
 
     /// Runs a formula block: the Klartext parser reads `Q… = …` once the closing `*` is blanked.
@@ -181,6 +212,18 @@ impl IsoState {
         out: &mut VecDeque<Op>,
     ) -> Result<IsoFlow, ExecError> {
         let mark = out.len();
+        let mirror = b
+            .words
+            .iter()
+            .any(|w| letter(w) == Some(b'G') && w.value == Value::Num(28.0));
+        if let Some(w) = b.words.iter().find(|w| w.bare && !mirror) {
+            return Err(err(
+                w.pos,
+                ProgramError::MissingValue(
+                    letter(w).map_or(String::new(), |c| char::from(c).to_string()),
+                ),
+            ));
+        }
         let r = self.words_inner(b, text, loc, out);
         if r.is_err() {
             out.truncate(mark);
@@ -205,6 +248,10 @@ impl IsoState {
         let mut blank = None;
         let mut dwell = false;
         let mut stop = false;
+        let mut paraxial = None;
+        let mut transform = None;
+        let mut cycle_call = false;
+        let mut old_cycle = None;
         if let Some(w) = b
             .words
             .iter()
@@ -234,7 +281,24 @@ impl IsoState {
                 15 => motion_here = Some(Motion::PolarLast),
                 16 => motion_here = Some(Motion::PolarTangent),
                 24 => corner = Some(Stmt::Chamfer),
-                25 => corner = Some(Stmt::Round),
+                // G26/G27: a rounding arc between the uncompensated approach (departure)
+                // line and the first (last) compensated contour element, like G25
+                25..=27 => corner = Some(Stmt::Round),
+                43 => paraxial = Some((true, w.pos)),
+                44 => paraxial = Some((false, w.pos)),
+                28 | 53 | 54 | 62 | 72 | 73 | 80 => {
+                    if transform.is_some() {
+                        return Err(err(
+                            w.pos,
+                            ProgramError::Unexpected(
+                                "two coordinate transformations in one block".into(),
+                            ),
+                        ));
+                    }
+                    transform = Some((g, w.pos));
+                }
+                79 => cycle_call = true,
+                83 | 84 => old_cycle = Some(g),
                 17 => plane_axis = Some(AxisLetter::Z),
                 18 => plane_axis = Some(AxisLetter::Y),
                 19 => plane_axis = Some(AxisLetter::X),
@@ -280,6 +344,17 @@ impl IsoState {
         }
         if let Some(a) = plane_axis {
             self.axis = a;
+        }
+        if let Some((g, pos)) = transform {
+            self.transform(g, pos, b, text, loc, out)?;
+            return Ok(IsoFlow::Continue);
+        }
+        if cycle_call {
+            return self.cycle_call(b, text, loc, out);
+        }
+        if let Some(g) = old_cycle {
+            self.old_cycle(g, b, text, loc, out)?;
+            return Ok(IsoFlow::Continue);
         }
         let find = |c: u8| b.words.iter().find(|w| letter(w) == Some(c));
         if label_def {
@@ -418,12 +493,13 @@ impl IsoState {
             comp,
             stop,
             tool_call,
+            paraxial,
         };
         self.motion_block(b, flags, text, loc, out)
     }
 
     /// Copies the axis words of a block into Klartext words.
-    fn axes_into(&self, b: &IsoBlock, words: &mut Words) -> Result<(), ExecError> {
+    pub(super) fn axes_into(&self, b: &IsoBlock, words: &mut Words) -> Result<(), ExecError> {
         for w in &b.words {
             let Some(c) = letter(w) else { continue };
             let Some(axis) = AxisLetter::from_char(char::from(c)) else {
@@ -460,26 +536,13 @@ impl IsoState {
             comp,
             stop,
             tool_call,
+            paraxial,
         } = flags;
         let mut words = Words::default();
         self.axes_into(b, &mut words)?;
         words.comp = comp;
-        let mut n_m = 0usize;
-        for w in b.words.iter().filter(|w| letter(w) == Some(b'M')) {
-            let m = code(w, "M")?;
-            if n_m >= MAX_M {
-                return Err(err(
-                    w.pos,
-                    ProgramError::OutOfRange(format!("more than {MAX_M} M words in one block")),
-                ));
-            }
-            if let (Some(slot), Some(p)) = (words.m.get_mut(n_m), words.m_pos.get_mut(n_m)) {
-                *slot = m;
-                *p = w.pos;
-            }
-            n_m += 1;
-        }
-        words.m_count = n_m as u8;
+        words.paraxial = paraxial;
+        let n_m = m_words(b, &mut words)?;
         let find = |c: u8| b.words.iter().find(|w| letter(w) == Some(c));
         // in a T block F is the tool's automatic feed (FAUTO), not a path feed
         let feed = find(b'F')
@@ -644,7 +707,7 @@ impl IsoState {
         Ok(self.after_stop(stop, loc, out))
     }
 
-    fn after_stop(&self, stop: bool, loc: SourceLoc, out: &mut VecDeque<Op>) -> IsoFlow {
+    pub(super) fn after_stop(&self, stop: bool, loc: SourceLoc, out: &mut VecDeque<Op>) -> IsoFlow {
         if stop {
             out.push_back(Op {
                 kind: OpKind::Stop { optional: false },

@@ -5,6 +5,7 @@
 //! by the Klartext machine, so an ISO program and its Klartext twin yield the same op stream.
 
 pub(crate) mod block;
+pub(crate) mod cycles;
 pub(crate) mod dfunc;
 pub(crate) mod exec;
 pub(crate) mod run;

@@ -191,6 +191,14 @@ impl IsoProgram {
         };
         self.blocks += 1;
         let text = self.reader.text();
+        let numbered = self.block.number.is_some();
+        if numbered || !matches!(self.block.kind, IsoKind::Formula) {
+            // a numbered block or one that is no `Q…=` line completes a cycle definition
+            // written over several lines
+            self.state
+                .close_cycle(text, &mut self.queue)
+                .map_err(|(p, e)| self.diag(p.map_or(start, |p| p as usize), &e))?;
+        }
         let flow = match self.block.kind {
             IsoKind::Header { .. } => {
                 // the closing block: END PGM
@@ -205,10 +213,22 @@ impl IsoProgram {
                 }
                 return Ok(());
             }
-            IsoKind::Formula => {
+            IsoKind::Formula if numbered => {
                 let r = self.state.formula(text, loc, &mut self.queue);
                 r.map(|()| IsoFlow::Continue)
             }
+            IsoKind::Formula => match self.state.cycle_more(text, &mut self.queue) {
+                Ok(true) => Ok(IsoFlow::Continue),
+                Ok(false) => {
+                    let r = self.state.formula(text, loc, &mut self.queue);
+                    r.map(|()| IsoFlow::Continue)
+                }
+                Err(e) => Err(e),
+            },
+            IsoKind::CycleDef { number, after } => self
+                .state
+                .cycle_head(number, after, text, loc, &mut self.queue)
+                .map(|()| IsoFlow::Continue),
             IsoKind::Words => self.state.words(&self.block, text, loc, &mut self.queue),
             IsoKind::Empty => Ok(IsoFlow::Continue),
         };
@@ -328,6 +348,23 @@ impl IsoProgram {
         })
     }
 
+    /// Hands out the front op when nothing can change it any more, in machine coordinates:
+    /// the cycle transforms (datum shift, mirror, rotation, scaling) first, then the tilted
+    /// working plane, as for Klartext programs.
+    fn pop_ready(&mut self) -> Option<Op> {
+        if let Some(op) = self.state.machine.tilt_pending() {
+            return Some(op);
+        }
+        if !self.state.machine.front_ready() {
+            return None;
+        }
+        let op = self.queue.pop_front()?;
+        let op = self.state.machine.output(op);
+        let op = self.state.machine.tilt_output(op);
+        self.state.machine.popped();
+        Some(op)
+    }
+
     fn run_all(&mut self, mode: Mode) -> Vec<Diagnostic> {
         let mut diags = Vec::new();
         while self.phase != Phase::Done {
@@ -335,9 +372,7 @@ impl IsoProgram {
                 diags.push(d);
             }
             // hand out what is ready; a held contour element stays for a G24/G25
-            while self.state.machine.front_ready() && self.queue.pop_front().is_some() {
-                self.state.machine.popped();
-            }
+            while self.pop_ready().is_some() {}
         }
         diags
     }
@@ -349,10 +384,7 @@ impl Iterator for IsoProgram {
     fn next(&mut self) -> Option<Self::Item> {
         loop {
             // the last contour element waits while a G24/G25 in the next block may shorten it
-            if self.state.machine.front_ready()
-                && let Some(op) = self.queue.pop_front()
-            {
-                self.state.machine.popped();
+            if let Some(op) = self.pop_ready() {
                 return Some(Ok(op));
             }
             if let Some(d) = self.pending_error.take() {
@@ -361,10 +393,7 @@ impl Iterator for IsoProgram {
             }
             if self.finished || self.phase == Phase::Done {
                 self.state.machine.release();
-                if let Some(op) = self.queue.pop_front() {
-                    return Some(Ok(op));
-                }
-                return None;
+                return self.pop_ready().map(Ok);
             }
             if let Err(d) = self.step(Mode::Run) {
                 self.finished = true;

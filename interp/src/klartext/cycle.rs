@@ -304,7 +304,7 @@ fn old_items(text: &[u8], from: usize, out: &mut Vec<OldItem>) -> PResult<()> {
 }
 
 /// Reads the `Qn=value` assignments of a current-format definition (after the name).
-fn q_entries(text: &[u8], from: usize, out: &mut Vec<QEntry>) -> PResult<()> {
+pub(crate) fn q_entries(text: &[u8], from: usize, out: &mut Vec<QEntry>) -> PResult<()> {
     out.clear();
     let mut i = from;
     // skip the cycle name: everything up to the first `Qn` followed by `=`

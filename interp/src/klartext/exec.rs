@@ -177,6 +177,10 @@ pub(crate) struct Machine {
     pub(super) io: super::system::ProgramIo,
     /// Cycle definitions, transforms and cycle calls.
     pub(super) cyc: super::cycle_exec::CycleState,
+    /// Tilted working plane and TCPM.
+    pub(super) tilt: super::plane::PlaneState,
+    /// FK free contour elements waiting for data, FPOL pole, solved FK elements.
+    pub(super) fk: super::fk_solve::FkState,
 }
 
 /// An execution error located at a word of the block.
@@ -222,6 +226,8 @@ impl Machine {
             unit: 1.0,
             io: Default::default(),
             cyc: Default::default(),
+            tilt: Default::default(),
+            fk: Default::default(),
         }
     }
 
@@ -355,6 +361,11 @@ impl Machine {
         {
             r = Err(e);
         }
+        if r.is_ok()
+            && let Err(e) = self.check_tilt(out, mark)
+        {
+            r = Err(e);
+        }
         if r.is_err() {
             out.truncate(mark);
         }
@@ -398,6 +409,10 @@ impl Machine {
                 | Stmt::CirclePolar
                 | Stmt::CircleTangentPolar
         );
+        if (emits || matches!(stmt, Stmt::Round | Stmt::Chamfer)) && !matches!(stmt, Stmt::Fk(_)) {
+            // a block other than FK ends an FK section
+            self.fk_flush(out)?;
+        }
         if emits && !path {
             if self.corner.is_some() {
                 return Err(here(ProgramError::Geometry(
@@ -466,9 +481,13 @@ impl Machine {
                 self.corner_request(stmt, w)?;
                 Ok(Flow::Continue)
             }
+            Stmt::CycleDef { number: 19, sub } => self.cycle19(*sub, parsed, out, loc),
             Stmt::CycleDef { number, sub } => self.cycle_def(*number, *sub, parsed, out, loc),
+            Stmt::Plane => self.plane_block(parsed, out, loc),
+            Stmt::Tcpm { on } => Ok(self.tcpm_block(*on, out, loc)),
             Stmt::CycleCall { kind } => self.cycle_call(*kind, parsed, out, loc),
             Stmt::PatternDef => self.pattern_def(parsed),
+            Stmt::Fk(kind) => self.fk_exec(*kind, &parsed.fk, loc, out),
             Stmt::Spline => {
                 let ms = MWords::classify(w)?;
                 let op = self.spline(w, &parsed.spline)?;
@@ -572,7 +591,7 @@ impl Machine {
     /// Emits the M functions, compensation change and motion of a path block; the motion
     /// becomes the held contour element.
     #[inline(always)]
-    fn finish_path(
+    pub(super) fn finish_path(
         &mut self,
         m: OpKind,
         w: &Words,

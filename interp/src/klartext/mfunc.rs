@@ -39,6 +39,7 @@ pub(super) struct MWords {
     corner: Option<CornerRule>,
     cycle_call: bool,
     modal_call: Option<bool>,
+    tcpm: Option<bool>,
 }
 
 impl MWords {
@@ -73,6 +74,8 @@ impl MWords {
                     m.modal_call = Some(false);
                 }
                 89 => m.modal_call = Some(true),
+                // M128: keep the tool tip on the path while rotary axes turn; M129 ends it
+                128 | 129 => m.tcpm = Some(num == 128),
                 140 => {
                     m.retract = true;
                     m.retract_pos = pos;
@@ -95,6 +98,9 @@ impl MWords {
 
     /// Ops acting at block start.
     pub(super) fn before(&self, mc: &mut Machine, emit: &mut impl FnMut(OpKind)) {
+        if let Some(on) = self.tcpm {
+            mc.set_m128(on, emit);
+        }
         if let Some(rule) = self.corner {
             emit(OpKind::CornerRule { rule });
         }

@@ -7,9 +7,9 @@
 //! Tolerated forms seen in real files: optional block number (also `N12`), `/` block skip
 //! before or after the number, spaces inside words, `R`/`F`/`M`/`REP` without a value (old
 //! exports: `R` alone is R0, an empty `F`, `M` or `REP` is ignored), `F MAX`, decimal commas,
-//! `* - text` headlines, `;` comments and `( … )` comment headers. Block types of later
-//! milestones (FK, PLANE, …) are recognised by their keyword and reported as
-//! not supported when executed; their words are not checked yet.
+//! `* - text` headlines, `;` comments and `( … )` comment headers. Block types this version
+//! does not run (the keyword `FK` alone, other FN numbers, …) are recognised by their keyword
+//! and reported as not supported when executed.
 
 use super::lexer::{Lexer, TokKind, Token};
 use crate::diag::ProgramError;
@@ -295,6 +295,15 @@ pub(crate) enum Stmt {
     },
     /// `PATTERN DEF …`: elements in [`Parser::cycle`].
     PatternDef,
+    /// An FK block (FPOL, FL, FLT, FC, FCT, FSELECT): words in [`Parser::fk`].
+    Fk(super::fk::FkKind),
+    /// `PLANE …`: words in [`Parser::plane`].
+    Plane,
+    /// `FUNCTION TCPM …` (`on`) or `FUNCTION RESET TCPM`.
+    Tcpm {
+        /// True for FUNCTION TCPM.
+        on: bool,
+    },
     /// A block type recognised but not implemented yet.
     Unsupported {
         /// Its keyword.
@@ -404,6 +413,10 @@ pub(crate) struct Parser {
     pub spline: SplineWords,
     /// Words of the last parsed cycle block (CYCL DEF, PATTERN DEF).
     pub cycle: super::cycle::CycleWords,
+    /// Words of the last parsed FK block.
+    pub fk: super::fk::FkWords,
+    /// Words of the last parsed PLANE block.
+    pub plane: super::plane::PlaneWords,
 }
 
 /// Upper-cases an identifier into a small stack buffer (longer ones are cut, which makes them
@@ -744,11 +757,15 @@ impl Parser {
                 self.words(lx, W_AXES | W_POLAR | PATH, "CTP")?;
                 Ok(Stmt::CircleTangentPolar)
             }
-            b"FPOL" | b"FL" | b"FLT" | b"FC" | b"FCT" | b"FK" | b"FSELECT" => {
-                unsupported("FK free contour programming")
-            }
-            b"PLANE" => unsupported("PLANE"),
-            b"FUNCTION" => unsupported("FUNCTION"),
+            b"FPOL" => self.fk_block(lx, super::fk::FkKind::Pole),
+            b"FL" => self.fk_block(lx, super::fk::FkKind::Line),
+            b"FLT" => self.fk_block(lx, super::fk::FkKind::LineTangent),
+            b"FC" => self.fk_block(lx, super::fk::FkKind::Arc),
+            b"FCT" => self.fk_block(lx, super::fk::FkKind::ArcTangent),
+            b"FSELECT" => self.fk_block(lx, super::fk::FkKind::Select),
+            b"FK" => unsupported("FK free contour programming"),
+            b"PLANE" => super::plane::parse_plane(self, lx, t.start()),
+            b"FUNCTION" => super::plane::parse_function(lx),
             b"TCH" => unsupported("TCH PROBE"),
             b"DECLARE" => self.declare(lx),
             b"SEL" => unsupported("SEL"),

@@ -5,9 +5,11 @@
 
 pub mod cartesian;
 pub mod lathe;
+pub mod table_table;
 
 pub use cartesian::Cartesian;
 pub use lathe::Lathe;
+pub use table_table::{TableTable, TiltAxis};
 
 use klar_interp::{AxisLetter, Pose};
 
@@ -29,4 +31,8 @@ pub trait Kinematics {
     /// Machine axis velocities (or accelerations) for program-axis rates at `pose`: the
     /// Jacobian of [`Kinematics::to_machine`] applied to `rates`.
     fn rates_to_machine(&self, pose: &Pose, rates: &[f64; 9], machine: &mut [f64]);
+
+    /// Switches tool centre point management (M128 / FUNCTION TCPM) on or off. Kinematics
+    /// without rotary axes that move the workpiece ignore it (the default).
+    fn set_tcpm(&mut self, _on: bool) {}
 }

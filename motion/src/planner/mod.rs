@@ -339,7 +339,10 @@ impl Planner {
                 });
                 return Ok(());
             }
-            OpKind::Coolant { .. } | OpKind::RadiusComp { .. } | OpKind::CornerRule { .. } => {
+            OpKind::Coolant { .. }
+            | OpKind::RadiusComp { .. }
+            | OpKind::CornerRule { .. }
+            | OpKind::Tcpm { .. } => {
                 self.add_event(op);
                 return Ok(());
             }
