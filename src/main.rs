@@ -199,7 +199,14 @@ fn cmd_check(program: &Path, machine: Option<&Path>, quiet: bool) -> ExitCode {
     if machine.is_some() {
         return cmd_test_run(program, &config);
     }
-    let diags = klar_interp::check(program, start_pose(&config));
+    let report = klar_interp::check_report(program, start_pose(&config));
+    for m in &report.missing {
+        eprintln!("{m} (warning: a run stops here)");
+    }
+    for u in &report.undecided {
+        eprintln!("{u} (decided only when the program runs)");
+    }
+    let diags = report.errors;
     if diags.is_empty() {
         if !quiet {
             say!("{}: ok", program.display());

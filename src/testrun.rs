@@ -75,8 +75,32 @@ pub(crate) fn positioning_axes(config: &MachineConfig) -> Vec<Option<(f64, f64)>
 /// Runs the test run of the program at `path` on `config`.
 pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
     let start = start_pose(config);
+    let checked = match config.open_program(path, start) {
+        Ok(it) => it.check_report(),
+        Err(d) => klar_interp::CheckReport {
+            errors: vec![d],
+            ..klar_interp::CheckReport::default()
+        },
+    };
+    // A file the program needs is not there: the run would stop at it.
+    let mut errors = checked.errors;
+    errors.extend(checked.missing.iter().cloned());
+    errors.sort_by_key(|d| d.line);
+    // Where the program depends on what happens at the machine (a missing called program,
+    // positions the operator set during a stop), an error there is not the program's.
+    let undecided_at: Vec<(std::path::PathBuf, u32)> = checked
+        .undecided
+        .iter()
+        .chain(&checked.missing)
+        .map(|d| (d.file.clone(), d.line))
+        .collect();
     let mut report = TestRunReport {
-        errors: klar_interp::check(path, start),
+        errors,
+        undecided: checked
+            .undecided
+            .iter()
+            .map(|d| format!("{d} (decided only when the program runs)"))
+            .collect(),
         envelope: config
             .axes
             .iter()
@@ -109,12 +133,20 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
         match item {
             Ok(op) => machine.op(op, &mut report),
             Err(d) => {
-                report.undecided.push(format!(
-                    "machine checks stop at line {}: the program's positions after its first \
-                     error depend on how that error is resolved",
-                    d.line
-                ));
-                if first_error_line.is_none() {
+                let at_machine = undecided_at.contains(&(d.file.clone(), d.line));
+                report.undecided.push(if at_machine {
+                    format!(
+                        "machine checks stop at line {}: what follows depends on the machine",
+                        d.line
+                    )
+                } else {
+                    format!(
+                        "machine checks stop at line {}: the program's positions after its \
+                         first error depend on how that error is resolved",
+                        d.line
+                    )
+                });
+                if first_error_line.is_none() && !at_machine {
                     report.errors.push(d);
                 }
                 break;
@@ -187,7 +219,9 @@ impl<'a> MachineChecks<'a> {
             OpKind::Spindle { dir, speed, .. } => self.spindle(op.loc, *dir, *speed, report),
             OpKind::ToolChange { tool, .. } => {
                 self.tool_calls += 1;
+                // Tool 0 is the zero tool (length and radius 0) every TNC knows.
                 if let Some(tools) = &self.config.tools
+                    && *tool != 0
                     && !tools.iter().any(|t| t.number == *tool)
                 {
                     self.error(

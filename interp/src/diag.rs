@@ -179,6 +179,9 @@ pub enum ProgramError {
     /// FN 16 output or a table (FN 26–28) that cannot be read or written.
     #[error("{0}")]
     FileData(String),
+    /// A file the program reads (a table, an FN 16 format file) is not there.
+    #[error("{0}")]
+    MissingFile(String),
     /// Arithmetic failure in a Q parameter computation.
     #[error("{0}")]
     Arithmetic(String),

@@ -123,6 +123,14 @@ pub struct Interpreter {
     idle_jumps: u64,
     /// The runner of a TNC ISO or lathe DIN program, which this interpreter delegates to.
     other: Option<Box<dyn DialectRun>>,
+    /// Check runs: what cannot be decided before the run (see [`check_report`]).
+    undecided: Vec<Diagnostic>,
+    /// Check runs: files the program reads that are not there (see [`check_report`]).
+    missing: Vec<Diagnostic>,
+    /// Check runs: from this point on the program's values depend on the machine (a position
+    /// the operator set during a program stop, a called program or a table that is not
+    /// there): what it says in words.
+    depends_on: Option<String>,
 }
 
 impl std::fmt::Debug for Interpreter {
@@ -258,6 +266,9 @@ impl Interpreter {
             jumps: 0,
             idle_jumps: 0,
             other: None,
+            undecided: Vec::new(),
+            missing: Vec::new(),
+            depends_on: None,
         }
     }
 
@@ -750,12 +761,31 @@ impl Interpreter {
                 // locate now: reading ahead for a label replaces the block text
                 let (line, col) = u.reader.position(block.start);
                 let file = u.path.clone();
-                self.follow(flow, mode)
-                    .map_err(|e| Diagnostic::new(file, line, col, block.number, &e))
+                match self.follow(flow, mode) {
+                    // a check of this file goes on past a called program that is not there;
+                    // the run stops at the call
+                    Err(e @ ProgramError::CallPgm(_)) if mode == Mode::Check => {
+                        let d = Diagnostic::new(file, line, col, block.number, &e);
+                        self.missing.push(d);
+                        self.depends_on
+                            .get_or_insert_with(|| format!("the program called at line {line}"));
+                        Ok(())
+                    }
+                    r => r.map_err(|e| Diagnostic::new(file, line, col, block.number, &e)),
+                }
             }
             Err((pos, error)) => {
                 let p = pos.map_or(block.start, |p| p as usize);
-                Err(self.diag_at(p, block.number, &error))
+                let d = self.diag_at(p, block.number, &error);
+                if mode == Mode::Check && matches!(error, ProgramError::MissingFile(_)) {
+                    // a table or format file that lives on the machine, not beside the program
+                    let line = d.line;
+                    self.missing.push(d);
+                    self.depends_on
+                        .get_or_insert_with(|| format!("the file missing at line {line}"));
+                    return Ok(());
+                }
+                Err(d)
             }
         }
     }
@@ -783,8 +813,24 @@ impl Interpreter {
         }
         let mut diags = Vec::new();
         while !self.done {
-            if let Err(d) = self.step(mode) {
+            let r = self.step(mode);
+            if mode == Mode::Check && self.depends_on.is_none() && self.machine.operator_value {
+                self.depends_on = Some(format!(
+                    "the position read at line {} after a program stop",
+                    self.current.line
+                ));
+            }
+            if let Err(mut d) = r {
                 let jump_limit = d.message.contains("jumps: the check stops");
+                if let Some(why) = &self.depends_on {
+                    // values that depend on the machine are only known when the program runs
+                    d.message = format!("{} (depends on {why})", d.message);
+                    self.undecided.push(d);
+                    if self.undecided.len() >= CHECK_DIAGNOSTIC_LIMIT {
+                        break;
+                    }
+                    continue;
+                }
                 diags.push(d);
                 if diags.len() >= CHECK_DIAGNOSTIC_LIMIT || jump_limit {
                     break;
@@ -841,13 +887,54 @@ pub fn syntax_check(path: &Path) -> Result<(), Vec<Diagnostic>> {
 
 /// Checks syntax and runs the program without motion, reporting all errors (geometry and
 /// runtime errors included); a block with an error is skipped and the run goes on.
+///
+/// Files the program reads that are not there (a called program, a table) count as errors
+/// here; [`check_report`] tells them apart.
 pub fn check(path: &Path, start: Pose) -> Vec<Diagnostic> {
+    let r = check_report(path, start);
+    let mut all = r.errors;
+    all.extend(r.missing);
+    all.sort_by_key(|d| d.line);
+    all
+}
+
+/// What a check run found: errors, and what cannot be decided before the program runs.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct CheckReport {
+    /// Errors: the program is refused.
+    pub errors: Vec<Diagnostic>,
+    /// Files the program reads that are not beside it (a called program, a table): the
+    /// check of this file goes on past them, a run stops there. A test run against a machine
+    /// refuses them.
+    pub missing: Vec<Diagnostic>,
+    /// Problems that depend on what happens at the machine: errors that follow from positions
+    /// read (FN 18 ID240/ID270) after a program stop, where the operator may have moved the
+    /// axes, or from a missing file's data.
+    pub undecided: Vec<Diagnostic>,
+}
+
+/// [`check`] with what it could not decide before the run.
+pub fn check_report(path: &Path, start: Pose) -> CheckReport {
     match Interpreter::open(path, start) {
-        Ok(mut it) => {
-            it.machine.set_dry_run(true);
-            it.run_all(Mode::Check)
+        Ok(it) => it.check_report(),
+        Err(d) => CheckReport {
+            errors: vec![d],
+            ..CheckReport::default()
+        },
+    }
+}
+
+impl Interpreter {
+    /// Runs the whole program as a check (no file is written; every error is reported, a
+    /// block with an error is skipped) with this interpreter's tools and machine settings.
+    pub fn check_report(mut self) -> CheckReport {
+        self.machine.set_dry_run(true);
+        let errors = self.run_all(Mode::Check);
+        CheckReport {
+            errors,
+            missing: std::mem::take(&mut self.missing),
+            undecided: std::mem::take(&mut self.undecided),
         }
-        Err(d) => vec![d],
     }
 }
 

@@ -20,8 +20,8 @@ mod source;
 pub use diag::{Diagnostic, ProgramError};
 pub use dialect::{Dialect, detect_dialect};
 pub use interpreter::{
-    CHECK_DIAGNOSTIC_LIMIT, CHECK_JUMP_LIMIT, Interpreter, MAX_PROGRAM_DEPTH, MAX_SUBPROGRAM_DEPTH,
-    RUN_IDLE_JUMP_LIMIT, check, syntax_check,
+    CHECK_DIAGNOSTIC_LIMIT, CHECK_JUMP_LIMIT, CheckReport, Interpreter, MAX_PROGRAM_DEPTH,
+    MAX_SUBPROGRAM_DEPTH, RUN_IDLE_JUMP_LIMIT, check, check_report, syntax_check,
 };
 pub use klartext::contour::SPLINE_START_TOLERANCE;
 pub use klartext::cycle_table::{DatumTable, DatumTableError};

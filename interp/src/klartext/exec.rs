@@ -173,6 +173,11 @@ pub(crate) struct Machine {
     pub(super) unit: f64,
     /// Highest position of the tool axis (M140 MB MAX), when known.
     pub retract_limit: Option<f64>,
+    /// A program stop (STOP, M0, M1) has run: the operator may have moved the axes since.
+    pub(crate) after_stop: bool,
+    /// A position was read (FN 18 ID240/ID270) after a program stop: what is computed from
+    /// it is only known at the machine.
+    pub(crate) operator_value: bool,
     /// Files the program reads and writes (FN 16 output, FN 26–28 tables).
     pub(super) io: super::system::ProgramIo,
     /// Cycle definitions, transforms and cycle calls.
@@ -223,6 +228,8 @@ impl Machine {
             shortest_rotary: false,
             tool_base: (0.0, 0.0),
             retract_limit: None,
+            after_stop: false,
+            operator_value: false,
             unit: 1.0,
             io: Default::default(),
             cyc: Default::default(),
@@ -531,6 +538,11 @@ impl Machine {
                 idx,
             } => {
                 let v = self.sysread(*id, *nr, *idx)?;
+                // positions read after a program stop are wherever the operator left the axes
+                let which = self.params.value(*id);
+                if self.after_stop && (which == 240.0 || which == 270.0) {
+                    self.operator_value = true;
+                }
                 self.params.set(*target, v);
                 Ok(Flow::Continue)
             }
@@ -664,7 +676,14 @@ impl Machine {
                 let rep = match rep {
                     None => None,
                     Some(v) => {
-                        let n = self.params.value(*v);
+                        // A repeat count taken from a Q parameter counts whole repeats: the
+                        // fraction of a computed count (`Q9 = 71 / 2` → REPQ9) is dropped, as
+                        // the control takes the parameter as an integer count. A count
+                        // written as a number must be whole (the parser sees to that).
+                        let mut n = self.params.value(*v);
+                        if matches!(v, super::expr::Value::Param { .. }) && n >= 0.0 {
+                            n = n.trunc();
+                        }
                         if !(n >= 0.0 && n.fract() == 0.0 && n <= 65_534.0) {
                             return Err(here(ProgramError::OutOfRange(format!(
                                 "REP {n} is not a whole number from 0 to 65534"

@@ -182,6 +182,9 @@ impl MWords {
             mc.end_ops(emit);
             return Flow::End;
         }
+        if self.stop || stop_block || self.optional_stop {
+            mc.after_stop = true;
+        }
         if self.stop {
             mc.spindle_coolant_off(emit);
             emit(OpKind::Stop { optional: false });

@@ -591,7 +591,15 @@ impl Parser {
                 start,
                 stmt,
             }),
-            Err((pos, error)) => Err(ParseError { pos, number, error }),
+            Err((pos, error)) => match template_placeholder(text) {
+                // a file generated from a template whose fields were never filled in
+                Some((at, field)) => Err(ParseError {
+                    pos: at,
+                    number,
+                    error: ProgramError::Placeholder(field),
+                }),
+                None => Err(ParseError { pos, number, error }),
+            },
         }
     }
 
@@ -881,6 +889,30 @@ fn plain_prefix(text: &[u8]) -> Option<PlainPrefix> {
 
 /// True when the block is only a comment (`[/][N]nr ; text`). Such a comment may run over
 /// several `~`-continued lines, unlike a comment after a word, which ends with its line.
+/// The first `{…}` field of a text template in a block that failed to parse (Python-style
+/// `{0:+d}`, `{1:s}`, `{name}`), with its byte position.
+fn template_placeholder(text: &[u8]) -> Option<(usize, String)> {
+    let open = text.iter().position(|&b| b == b'{')?;
+    let len = text
+        .get(open + 1..)?
+        .iter()
+        .take(40)
+        .position(|&b| b == b'}')?;
+    let inner = text.get(open + 1..open + 1 + len)?;
+    let plausible = inner
+        .iter()
+        .all(|&b| b.is_ascii_alphanumeric() || b"_:+-.<>^=,#%".contains(&b));
+    plausible.then(|| {
+        let field = text
+            .get(open..open + len + 2)
+            .unwrap_or(&[])
+            .iter()
+            .map(|&b| char::from(b))
+            .collect();
+        (open, field)
+    })
+}
+
 fn is_comment_block(text: &[u8]) -> bool {
     let mut i = 0;
     let skip_ws = |i: &mut usize| {

@@ -87,7 +87,14 @@ pub(crate) fn program_relative(
 
 /// Reads a text file of at most `limit` bytes (latin-1: one character per byte).
 pub(crate) fn read_bounded(path: &Path, limit: u64) -> Result<String, ProgramError> {
-    let io = |e: std::io::Error| ProgramError::FileData(format!("{}: {e}", path.display()));
+    let io = |e: std::io::Error| {
+        let text = format!("{}: {e}", path.display());
+        if e.kind() == std::io::ErrorKind::NotFound {
+            ProgramError::MissingFile(text)
+        } else {
+            ProgramError::FileData(text)
+        }
+    };
     let meta = std::fs::metadata(path).map_err(io)?;
     if meta.len() > limit {
         return Err(ProgramError::FileData(format!(
