@@ -119,6 +119,9 @@ pub struct CycleContext {
     pub spindle: SpindleDir,
     /// Modal feed, mm/s, when one was programmed.
     pub feed: Option<f64>,
+    /// Cycle 21: radius of the rough-out tool named in its Q13 (table radius + DR), which
+    /// the caller looks up in its tool table; `None` otherwise.
+    pub rough_out_radius: Option<f64>,
 }
 
 /// Why a cycle cannot be generated.

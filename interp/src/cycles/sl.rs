@@ -22,6 +22,13 @@
 //! same distance, which takes off the ridges the lines leave. At the start and end the
 //! tool travels at the clearance height Q7.
 //!
+//! Cycle 21 PILOT DRILLING (Q10 plunging depth, Q11 plunging feed, Q13 rough-out tool)
+//! drills a hole at every point where cycle 22 with the rough-out tool will plunge: the
+//! starts of its clearing lines and wall paths, worked out with the rough-out tool's radius
+//! (the caller passes it as [`CycleContext::rough_out_radius`]). Each hole goes from the
+//! set-up clearance down to the rough-out floor (Q1 less the floor allowance Q4) in infeeds
+//! of at most Q10 at Q11, and the tool returns at rapid traverse to the set-up clearance.
+//!
 //! Cycle 23 FLOOR FINISHING (Q11, Q12) does the same in one cut at the depth Q1, the side
 //! allowance still left.
 //!
@@ -55,7 +62,7 @@ use region::{CHORD_TOL, RegionError};
 
 /// True when `number` is an SL machining cycle this module generates.
 pub(super) fn knows(number: u32) -> bool {
-    matches!(number, 22..=24)
+    matches!(number, 21..=24)
 }
 
 /// See [`super::generate_sl`].
@@ -83,6 +90,12 @@ pub(super) fn generate(
     let clear = d.check(6, d.q(6, "set-up clearance")?, 0.0, f64::MAX, "0 or more")?;
     let height = d.q(7, "clearance height")?;
     let (infeed, f_plunge, f_mill) = match cycle {
+        21 => {
+            let q10 = c.q(10, "plunging depth")?.abs();
+            c.check(10, q10, 1e-6, f64::MAX, "not 0")?;
+            let f11 = c.feed_or(11, super::pocket::params::modal_feed(ctx))?;
+            (q10, f11, f11)
+        }
         22 | 24 => {
             let q10 = c.q(10, "plunging depth")?.abs();
             c.check(10, q10, 1e-6, f64::MAX, "not 0")?;
@@ -94,14 +107,20 @@ pub(super) fn generate(
             (f64::MAX, c.feed_or(11, f12)?, f12)
         }
     };
-    let r = ctx.tool_radius;
+    // cycle 21 works out the plunge points of the rough-out tool
+    let r = match cycle {
+        21 => ctx.rough_out_radius.ok_or_else(|| {
+            c.geometry("the rough-out tool Q13 is not in the tool table".to_string())
+        })?,
+        _ => ctx.tool_radius,
+    };
     if !(r.is_finite() && r > 0.0) {
         return Err(c.geometry(format!("tool radius {r} is not usable")));
     }
     if depth == 0.0 {
         return Ok(());
     }
-    if cycle == 22 && -depth < floor {
+    if matches!(cycle, 21 | 22) && -depth < floor {
         return Err(d.geometry("the floor allowance Q4 is larger than the depth Q1"));
     }
     let region = region::build(contours).map_err(|e| {
@@ -132,7 +151,7 @@ pub(super) fn generate(
     let index = index::Index::new(&region, rho);
     let walls = offset::wall_paths(&region, &index, rho, area_left);
     let levels = match cycle {
-        22 => steps_down(surface, surface + depth + floor, infeed),
+        21 | 22 => steps_down(surface, surface + depth + floor, infeed),
         23 => vec![surface + depth],
         _ => steps_down(surface, surface + depth, infeed),
     };
@@ -169,6 +188,17 @@ pub(super) fn generate(
             2.0 * r
         )));
     }
+    if cycle == 21 {
+        return pilot_holes(
+            &passes,
+            &levels,
+            surface + clear,
+            height,
+            f_plunge,
+            ctx,
+            out,
+        );
+    }
     let points: usize = passes.iter().map(|p| p.len() + 4).sum();
     check_size(cycle, (levels.len() * points) as f64)?;
     let top = surface + clear;
@@ -192,6 +222,45 @@ pub(super) fn generate(
             let here = [path.cur[0], path.cur[1]];
             path.line(here, top, CycleFeed::Rapid);
         }
+    }
+    let here = [path.cur[0], path.cur[1]];
+    path.line(here, safe, CycleFeed::Rapid);
+    Ok(())
+}
+
+/// Cycle 21: a hole at the start of every pass of the rough-out, in infeeds `levels`.
+fn pilot_holes(
+    passes: &[Polyline],
+    levels: &[f64],
+    top: f64,
+    height: f64,
+    feed: CycleFeed,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+) -> Result<(), CycleError> {
+    let mut holes: Vec<[f64; 2]> = Vec::new();
+    for start in passes.iter().filter_map(|p| p.first()) {
+        if !holes
+            .iter()
+            .any(|h| (h[0] - start[0]).hypot(h[1] - start[1]) < 1e-6)
+        {
+            holes.push(*start);
+        }
+    }
+    check_size(21, (holes.len() * (levels.len() + 3)) as f64)?;
+    let safe = height.max(top);
+    let mut path = Path::new(out, Frame::new([0.0, 0.0], 0.0), ctx.pos);
+    if ctx.pos[2] < safe {
+        path.line_abs([ctx.pos[0], ctx.pos[1], safe], CycleFeed::Rapid);
+    }
+    for (k, h) in holes.iter().enumerate() {
+        let over = if k == 0 { ctx.pos[2].max(safe) } else { top };
+        path.line(*h, over, CycleFeed::Rapid);
+        path.line(*h, top, CycleFeed::Rapid);
+        for z in levels {
+            path.line(*h, *z, feed);
+        }
+        path.line(*h, top, CycleFeed::Rapid);
     }
     let here = [path.cur[0], path.cur[1]];
     path.line(here, safe, CycleFeed::Rapid);

@@ -545,6 +545,7 @@ impl Machine {
             spindle_rpm: self.speed,
             spindle: self.spindle,
             feed: self.feed,
+            rough_out_radius: None,
         }
     }
 

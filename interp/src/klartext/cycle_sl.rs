@@ -199,7 +199,16 @@ impl Machine {
         let (Some(def), Some(p20)) = (self.cyc.machining.clone(), self.cyc.p20.clone()) else {
             return Ok(());
         };
-        let ctx = self.cycle_ctx();
+        let mut ctx = self.cycle_ctx();
+        if def.number == 21 {
+            // pilot drilling works out where the rough-out tool Q13 will plunge
+            use cycles::ParamSource;
+            ctx.rough_out_radius = def
+                .get(cycles::ParamKey::Q(13))
+                .filter(|n| *n >= 0.0 && n.fract() == 0.0 && *n <= f64::from(u32::MAX))
+                .and_then(|n| self.tools.get(n as u32))
+                .map(|t| t.radius + t.dr);
+        }
         let mut moves = Vec::new();
         cycles::generate_sl(def.number, &contours, &p20, &def, &ctx, &mut moves)
             .map_err(ProgramError::Cycle)?;

@@ -142,6 +142,8 @@ struct Waiting {
 #[derive(Debug, Clone)]
 pub struct Planner {
     config: PlannerConfig,
+    /// The machine's own limits (`config.limits` is derated from them while TCPM is on).
+    base_limits: [Option<crate::config::AxisLimits>; 9],
     /// Tolerance for the corners from now on.
     tolerance: f64,
     /// Look-ahead distance wanted beyond the current position.
@@ -179,6 +181,34 @@ pub struct Planner {
     finished: bool,
 }
 
+/// Share of each linear axis's velocity, acceleration and jerk the program axes get while
+/// TCPM (and with it a tilted working plane) is on.
+///
+/// The planner limits the program (workpiece) axes; with the table turned, each machine
+/// linear axis moves as a row of a rotation matrix applied to them: `m_i = Σ_j R_ij p_j`. With
+/// `|p_j| ≤ L` that is at most `L · Σ_j |R_ij| ≤ L · √3` (a unit row), so `L = limit / √3` keeps
+/// every machine axis within its own limit whatever the rotation — for rates of the path at
+/// fixed rotary angles; the extra linear motion of a tool tip held while the table turns is
+/// not covered by this bound.
+pub const TCPM_DERATE: f64 = 0.577_350_269_189_625_8;
+
+/// The limits for the program axes while TCPM is on: linear axes derated by [`TCPM_DERATE`].
+fn tcpm_limits(
+    base: &[Option<crate::config::AxisLimits>; 9],
+) -> [Option<crate::config::AxisLimits>; 9] {
+    let mut out = *base;
+    for (i, l) in out.iter_mut().enumerate() {
+        if let Some(l) = l
+            && !letter(i).is_rotary()
+        {
+            l.max_velocity *= TCPM_DERATE;
+            l.max_acceleration *= TCPM_DERATE;
+            l.max_jerk *= TCPM_DERATE;
+        }
+    }
+    out
+}
+
 impl Planner {
     /// A planner for a machine standing at `start`.
     pub fn new(config: PlannerConfig, start: Pose) -> Result<Self, MotionError> {
@@ -208,6 +238,7 @@ impl Planner {
             + 1.0;
         Ok(Planner {
             tolerance: config.tolerance,
+            base_limits: config.limits,
             config,
             horizon,
             accel_floor,
@@ -397,10 +428,17 @@ impl Planner {
                 });
                 return Ok(());
             }
-            OpKind::Coolant { .. }
-            | OpKind::RadiusComp { .. }
-            | OpKind::CornerRule { .. }
-            | OpKind::Tcpm { .. } => {
+            OpKind::Tcpm { on } => {
+                // The switch follows an exact stop: the moves after it get the new limits.
+                self.config.limits = if *on {
+                    tcpm_limits(&self.base_limits)
+                } else {
+                    self.base_limits
+                };
+                self.add_event(op);
+                return Ok(());
+            }
+            OpKind::Coolant { .. } | OpKind::RadiusComp { .. } | OpKind::CornerRule { .. } => {
                 self.add_event(op);
                 return Ok(());
             }

@@ -49,6 +49,7 @@ pub(in crate::cycles) fn ctx_at(pos: P3) -> CycleContext {
         spindle_rpm: 1000.0,
         spindle: SpindleDir::Cw,
         feed: None,
+        rough_out_radius: None,
     }
 }
 

@@ -21,6 +21,7 @@ pub(in crate::cycles) fn ctx(pos: P3, r: f64) -> CycleContext {
         spindle_rpm: 1000.0,
         spindle: SpindleDir::Cw,
         feed: Some(1.0),
+        rough_out_radius: None,
     }
 }
 
