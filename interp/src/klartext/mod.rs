@@ -27,6 +27,8 @@ pub(crate) mod strings;
 pub(crate) mod structure;
 pub(crate) mod system;
 pub(crate) mod table;
+#[cfg(test)]
+mod test_support;
 pub(crate) mod tools;
 pub(crate) mod transform;
 pub(crate) mod words;

@@ -450,32 +450,8 @@ mod tests {
     use crate::klartext::exec::Machine;
     use crate::klartext::expr::ParamKind;
     use crate::klartext::parser::Parser;
-    use crate::op::{Pose, SourceLoc};
-
-    /// A fresh folder for one test.
-    fn folder(name: &str) -> PathBuf {
-        let d = std::env::temp_dir().join(format!("klar-{name}-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&d);
-        std::fs::create_dir_all(&d).unwrap();
-        d
-    }
-
-    fn run(m: &mut Machine, blocks: &str) -> Result<(), String> {
-        let mut p = Parser::default();
-        for (i, line) in blocks.lines().enumerate() {
-            let b = p.parse(line.as_bytes()).map_err(|e| e.error.to_string())?;
-            let loc = SourceLoc {
-                file: 0,
-                line: i as u32 + 1,
-                col: 1,
-                block: None,
-            };
-            let mut out = std::collections::VecDeque::new();
-            m.exec(&b.stmt, &p, line.as_bytes(), loc, &mut out)
-                .map_err(|e| format!("block {}: {}", i + 1, e.1))?;
-        }
-        Ok(())
-    }
+    use crate::klartext::test_support::{folder, run};
+    use crate::op::Pose;
 
     fn q(m: &Machine, n: u32) -> f64 {
         m.params.get(ParamRef {
