@@ -202,7 +202,10 @@ fn plane_on_the_three_axis_mill_is_refused_naming_the_block() {
 #[test]
 fn tilted_rapids_stay_within_the_machine_axis_limits() {
     let machine = MachineConfig::builtin_mill5();
-    let (result, trace) = run(&program("plane_spatial.h"), &machine);
-    result.unwrap_or_else(|f| panic!("{}", f.error));
-    common::assert_within_limits(&trace, &machine);
+    // the tilted pocket, and the table swivelling under M128 with the tool tip held
+    for name in ["plane_spatial.h", "m128_swivel.h"] {
+        let (result, trace) = run(&program(name), &machine);
+        result.unwrap_or_else(|f| panic!("{name}: {}", f.error));
+        common::assert_within_limits(&trace, &machine);
+    }
 }
