@@ -28,9 +28,7 @@ use crate::error::MotionError;
 use crate::geom::{Arc, GeomError, Line, Poly, Segment, finite_pose, letter};
 use crate::profile::Ramp;
 use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
-use path::{
-    Committed, Element, MAX_OVERRIDE, Piece, PieceError, Shape, commit, cut_piece, piece_limits,
-};
+use path::{Committed, Element, MAX_OVERRIDE, Piece, PieceError, Shape, commit, piece_limits};
 use speed::{Limit, Motion, Window};
 use std::collections::VecDeque;
 
@@ -42,56 +40,11 @@ pub const BUFFER_CAPACITY: usize = 20_000;
 /// The planner always continues from its own end point, so accepted gaps do not jump.
 pub const CONTINUITY_TOLERANCE: f64 = 1e-6;
 
-/// Relative amount by which the path speed may round above a speed limit and be set back
-/// onto it.
-const SPEED_ROUNDING: f64 = 1e-4;
-
 /// Distance (mm) within which a standstill counts as reaching a stop point.
 const STOP_SNAP: f64 = 1e-6;
 
 /// Elements kept back for corner decisions.
 const ELEMENTS_AHEAD: usize = 3;
-
-/// Share of the acceleration limits the braking curve uses: the rest leaves the speed
-/// generator room to follow its steps with limited jerk in whole servo periods.
-const CURVE_SHARE: f64 = 0.9;
-
-/// Share of a piece's speed limit below which the braking curve enters no more steps (the
-/// accelerations at such speeds are close to those at rest).
-const STAIR_FLOOR: f64 = 0.1;
-
-/// Length of the stretches over which the braking curve enters the limits as one step, in
-/// units of the distance the top speed covers while the acceleration builds up
-/// (acceleration / jerk): a step costs the time its acceleration takes to fall to zero and
-/// rise again, so with a low jerk the steps are long, with a high jerk they are short.
-const STAIR_LENGTH: f64 = 0.5;
-
-/// A piece whose acceleration at its speed limit is below this share of the one at rest
-/// takes the braking curve as steps.
-const STAIR_SHARE: f64 = 0.8;
-
-/// One piece within the look-ahead, with this cycle's values.
-#[derive(Debug, Clone, Copy, Default)]
-struct Ahead {
-    /// Index in the piece queue.
-    idx: usize,
-    /// Start of the piece.
-    at: f64,
-    /// End of the piece (at most the next stop).
-    end: f64,
-    /// Speed limit under the feed override.
-    cap: f64,
-    /// Braking curve at the start and end.
-    w_start: f64,
-    w_end: f64,
-    /// The step of the braking curve that holds on it.
-    step: f64,
-    /// Its speed limit this cycle (the lower of `cap` and `step`).
-    limit: f64,
-    /// Acceleration and jerk limits at an upper bound of its speed.
-    accel: f64,
-    jerk: f64,
-}
 
 /// The commanded state of all program axes at one servo instant.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -168,11 +121,6 @@ pub struct Planner {
     stash: Option<Sample>,
     hold_until: Option<(f64, SourceLoc)>,
     window: Window,
-    /// The pieces the last scan looked at.
-    ahead: Vec<Ahead>,
-    /// Length of the stretches of path over which the braking curve enters the limits as
-    /// one step.
-    stair_len: f64,
     /// Distance ahead the last scan looked at.
     range: f64,
     factor: f64,
@@ -228,11 +176,7 @@ impl Planner {
             .map(|l| l.max_acceleration)
             .fold(f64::INFINITY, f64::min)
             / 2.0;
-        let jerk_floor = axes
-            .clone()
-            .map(|l| l.max_jerk)
-            .fold(f64::INFINITY, f64::min)
-            / 2.0;
+        let jerk_floor = axes.map(|l| l.max_jerk).fold(f64::INFINITY, f64::min) / 2.0;
         let horizon = 2.0 * Ramp::new(top, 0.0, 0.0, accel_floor, jerk_floor).distance()
             + 4.0 * top * config.period
             + 1.0;
@@ -255,8 +199,6 @@ impl Planner {
             stash: None,
             hold_until: None,
             window: Window::default(),
-            ahead: Vec::new(),
-            stair_len: (STAIR_LENGTH * top * accel_floor / jerk_floor).max(f64::MIN_POSITIVE),
             range: 0.0,
             factor: 1.0,
             held: false,
@@ -513,24 +455,27 @@ impl Planner {
         let mut events_at = self.committed_end;
         for (shape, offset, length, feed, loc) in done.pieces {
             let is_element = matches!(shape, Shape::Element(_));
-            let pieces = &mut self.pieces;
-            let mut end = self.committed_end;
-            cut_piece(shape, offset, length, feed, loc, &self.config.limits, |c| {
-                pieces.push_back(Piece {
-                    shape: c.shape,
-                    offset: c.offset,
-                    length: c.length,
-                    start: end,
-                    vmax: c.vmax,
-                    feed: c.feed,
-                    dynamics: c.dynamics,
-                    jerk: c.jerk,
-                    loc: c.loc,
-                });
-                end += c.length;
-            })
-            .map_err(|e| piece_error(e, loc))?;
-            self.committed_end = end;
+            let l = piece_limits(&shape, length, feed, &self.config.limits)
+                .map_err(|e| piece_error(e, loc))?;
+            // A period that crosses from one piece into the next uses one jerk: give both
+            // the lower of their jerk limits.
+            let mut jerk = l.jerk;
+            if let Some(prev) = self.pieces.back_mut() {
+                prev.jerk = prev.jerk.min(jerk);
+                jerk = jerk.min(prev.jerk);
+            }
+            self.pieces.push_back(Piece {
+                shape,
+                offset,
+                length,
+                start: self.committed_end,
+                vmax: l.velocity,
+                feed,
+                accel: l.acceleration,
+                jerk,
+                loc,
+            });
+            self.committed_end += length;
             if is_element {
                 events_at = self.committed_end;
             }
@@ -674,14 +619,6 @@ impl Planner {
         if next.v < 0.0 {
             next.v = 0.0;
         }
-        // A speed within rounding above the limit where the state arrives (the jerk limits
-        // of the pieces passed differ a little from those the ramp assumed) is the limit.
-        if let Some(p) = self.pieces.iter().find(|p| p.end() > next.s) {
-            let limit = p.speed_limit(self.factor);
-            if next.v > limit && next.v <= limit * (1.0 + SPEED_ROUNDING) {
-                next.v = limit;
-            }
-        }
         // A standstill within rounding of the stop point is on it.
         if next.v <= 1e-9 && next.a.abs() <= 1e-3 && stop - next.s <= STOP_SNAP {
             next = Motion {
@@ -748,19 +685,8 @@ impl Planner {
     }
 
     /// Collects the speed limits ahead that can matter within the braking distance.
-    ///
-    /// The acceleration a piece allows depends on the speed (the centripetal terms, see
-    /// [`crate::limits`]), so each piece's limits are taken at an upper bound of the speed
-    /// the path can have on it: the speed reachable within the next period, and the
-    /// braking curve. The braking curve is the backward pass of time-optimal path
-    /// parameterisation over the window: from the next stop backwards, the highest speed
-    /// at each piece from which the speed-dependent acceleration limits can still brake.
-    /// Where a piece's acceleration depends strongly on the speed (a curve near its top
-    /// speed), that curve enters the limits as steps below it: the speed
-    /// generator's ramps use one acceleration per step, which fits the curve there.
     fn scan(&mut self) {
         let s = self.state.s;
-        let dt = self.config.period;
         let stop = self.next_stop();
         let first = self.current_index();
         let current = match self.pieces.get(first) {
@@ -768,190 +694,57 @@ impl Planner {
             None => 0.0,
         };
         let vh = self.state.v.max(current);
-        let (v0, a0) = (vh, self.state.a.max(0.0));
-        // The highest speed the state and the candidates for the next period can reach,
-        // with the acceleration they may build up in a period and ease again.
-        let jprev = if self.window.jerk.is_finite() && self.window.jerk > 0.0 {
-            self.window.jerk
-        } else {
-            self.jerk_floor
-        };
-        let rest = self
-            .pieces
-            .get(first)
-            .map_or(self.accel_floor, |p| p.dynamics.rest_accel());
-        let a1 = (a0 + jprev * dt).min(rest.max(a0));
-        let v_ref = self.state.v + 2.0 * a1 * dt + a1 * a1 / (2.0 * jprev);
+        let (v0, a0, period) = (vh, self.state.a.max(0.0), self.config.period);
         // Braking distance with the lowest limits seen so far, doubled.
         let reach_for = |accel: f64, jerk: f64| {
-            2.0 * Ramp::new(v0, a0, 0.0, accel, jerk).distance() + 2.0 * v0 * dt + 1e-9
+            2.0 * Ramp::new(v0, a0, 0.0, accel, jerk).distance() + 2.0 * v0 * period + 1e-9
         };
         let mut range = reach_for(self.accel_floor, self.jerk_floor);
-        // The pieces within reach, with a forward braking estimate for how far that is.
-        self.ahead.clear();
-        let mut vb = v0;
-        let mut low_jerk = self.jerk_floor;
-        for (k, p) in self.pieces.iter().enumerate().skip(first) {
-            if p.start - s > range || p.start >= stop {
-                break;
-            }
-            let cap = p.speed_limit(self.factor);
-            let end = p.end().min(stop);
-            self.ahead.push(Ahead {
-                idx: k,
-                at: p.start,
-                end,
-                cap,
-                w_start: cap,
-                w_end: cap,
-                step: f64::INFINITY,
-                limit: cap,
-                accel: 0.0,
-                jerk: 0.0,
-            });
-            if vb > 0.0 {
-                // The limits ahead are judged at the pieces' speed limits (see below).
-                let u = cap.min(p.vmax).max(vb.min(p.vmax));
-                let (a, j) = p.dynamics.up_to(u, u);
-                let a = a.max(f64::MIN_POSITIVE);
-                low_jerk = low_jerk.min(j.max(f64::MIN_POSITIVE));
-                let len = end - p.start.max(s);
-                let v2 = vb * vb - 2.0 * a * len;
-                let lead = v0 * (a0 + a) / low_jerk;
-                if v2 <= 0.0 {
-                    let braked = p.start.max(s) + vb * vb / (2.0 * a) - s;
-                    range = range.max(2.0 * (braked + lead) + 2.0 * v0 * dt);
-                    vb = 0.0;
-                } else {
-                    vb = v2.sqrt();
-                    range = range.max(2.0 * (end - s + lead) + 2.0 * v0 * dt);
-                }
-            }
-        }
-        self.range = range;
-        let stop_in = stop - s <= range;
-        // Backward pass: the braking curve at both ends of each piece, and the steps: the
-        // lowest braking-curve speed over the rest of each stretch of `stair_len`.
-        let mut w_next = match self.ahead.last() {
-            Some(e) if stop_in && e.end >= stop => 0.0,
-            Some(e) => e.cap,
-            None => 0.0,
-        };
-        let mut step_next = (f64::NAN, f64::INFINITY);
-        for e in self.ahead.iter_mut().rev() {
-            let Some(p) = self.pieces.get(e.idx) else {
-                continue;
-            };
-            let we = w_next.min(e.cap);
-            let len = (e.end - e.at).max(0.0);
-            let high = (we * we + 2.0 * len * p.dynamics.accel(we))
-                .sqrt()
-                .min(e.cap);
-            let ws = (we * we + 2.0 * len * CURVE_SHARE * p.dynamics.accel(high.min(p.vmax)))
-                .sqrt()
-                .min(e.cap);
-            e.w_start = ws;
-            e.w_end = we;
-            w_next = ws;
-            let stair = we < e.cap
-                && we > STAIR_FLOOR * e.cap
-                && p.dynamics.accel(e.cap.min(p.vmax)) < STAIR_SHARE * p.dynamics.accel(we);
-            let own = if stair { we } else { f64::INFINITY };
-            let block = (e.at / self.stair_len).floor();
-            e.step = if block == step_next.0 {
-                own.min(step_next.1)
-            } else {
-                own
-            };
-            step_next = (block, e.step);
-        }
-        // Each piece's acceleration and jerk limits at its speed limit, which do not change
-        // as the state moves on (limits that change under a state already following them
-        // would leave it behind a braking curve). The piece the state is on gives the
-        // state's own acceleration at the speed it can reach in the next period.
-        for (k, e) in self.ahead.iter_mut().enumerate() {
-            let Some(p) = self.pieces.get(e.idx) else {
-                continue;
-            };
-            let limit = e.cap.min(e.step);
-            let top = limit.min(p.vmax);
-            let (acc, jrk) = if k == 0 {
-                // The state itself: the acceleration at the speed it can reach in the next
-                // period; the jerk at the speed limit, so it does not fall as the speed rises.
-                let u = v_ref.min(top).max(self.state.v);
-                p.dynamics.up_to(u, top.max(self.state.v))
-            } else {
-                p.dynamics.up_to(top, top)
-            };
-            let jrk = jrk.min(p.jerk);
-            e.limit = limit;
-            e.accel = acc;
-            e.jerk = jrk;
-        }
-        // Forward pass: running minima of the speed and acceleration limits.
         let w = &mut self.window;
         w.limits.clear();
+        // Acceleration and jerk for the next period: those of the current piece (the
+        // limits ahead make the state arrive at each piece within its acceleration limit;
+        // neighbouring pieces share the lower jerk limit, see `commit_front`).
         w.accel = f64::INFINITY;
         w.jerk = f64::INFINITY;
         let (mut pre_accel, mut pre_jerk) = (f64::INFINITY, f64::INFINITY);
-        let (mut low_speed, mut low_accel, mut low_jerk) =
-            (f64::INFINITY, f64::INFINITY, f64::INFINITY);
-        // How far the state can get in the next period.
-        let next_reach = s + 1.5 * v_ref * dt;
-        for (k, e) in self.ahead.iter().enumerate() {
-            let (limit, acc, jrk) = (e.limit, e.accel, e.jerk);
+        let (mut low_speed, mut low_accel) = (f64::INFINITY, f64::INFINITY);
+        for (k, p) in self.pieces.iter().skip(first).enumerate() {
+            if p.start - s > range || p.start >= stop {
+                break;
+            }
             if k == 0 {
-                // The piece the state is on.
-                w.accel = acc;
-                w.jerk = jrk;
-                w.limits.push(Limit {
-                    at: e.at,
-                    speed: limit,
-                    accel_after: acc,
-                    accel: acc,
-                    jerk: jrk,
-                    accel_only: false,
-                });
-                (pre_accel, pre_jerk, low_accel, low_speed, low_jerk) = (acc, jrk, acc, limit, jrk);
-                continue;
+                w.accel = p.accel;
+                w.jerk = p.jerk;
             }
-            if e.at <= next_reach {
-                // A period that crosses into the next pieces uses one jerk for all.
-                w.jerk = w.jerk.min(jrk);
+            if k == 0 {
+                pre_accel = p.accel;
+                pre_jerk = p.jerk;
+                range = range.max(reach_for(pre_accel, pre_jerk));
             }
-            if limit < low_speed {
-                low_speed = limit;
-                low_accel = low_accel.min(acc);
-                low_jerk = low_jerk.min(jrk);
+            let limit = p.speed_limit(self.factor);
+            if limit < low_speed || p.accel < low_accel {
+                low_speed = low_speed.min(limit);
+                low_accel = low_accel.min(p.accel);
                 w.limits.push(Limit {
-                    at: e.at,
+                    at: p.start,
                     speed: limit,
-                    accel_after: acc,
+                    accel_after: p.accel,
                     accel: pre_accel,
                     jerk: pre_jerk,
-                    accel_only: false,
                 });
                 // Limits further on are checked from this one (see `speed::settle`).
-                pre_accel = acc;
-                pre_jerk = jrk;
-            } else if acc < low_accel || jrk < low_jerk {
-                // A lower acceleration limit only: the acceleration is brought down in
-                // time, and the speed limit is judged with the jerk up to here.
-                low_accel = low_accel.min(acc);
-                low_jerk = low_jerk.min(jrk);
-                w.limits.push(Limit {
-                    at: e.at,
-                    speed: limit,
-                    accel_after: acc,
-                    accel: pre_accel,
-                    jerk: pre_jerk.min(jrk),
-                    accel_only: true,
-                });
+                pre_accel = p.accel;
+                pre_jerk = p.jerk;
             }
-            pre_accel = pre_accel.min(acc);
-            pre_jerk = pre_jerk.min(jrk);
+            if p.accel < pre_accel || p.jerk < pre_jerk {
+                pre_accel = pre_accel.min(p.accel);
+                pre_jerk = pre_jerk.min(p.jerk);
+                range = range.max(reach_for(pre_accel, pre_jerk));
+            }
         }
-        if !w.accel.is_finite() || w.accel <= 0.0 {
+        self.range = range;
+        if !w.accel.is_finite() {
             w.accel = self.accel_floor;
             w.jerk = self.jerk_floor;
         }
@@ -959,22 +752,16 @@ impl Planner {
             pre_accel = w.accel;
             pre_jerk = w.jerk;
         }
-        if stop_in {
+        if stop - s <= range {
             w.limits.push(Limit {
                 at: stop,
                 speed: 0.0,
                 accel_after: f64::INFINITY,
                 accel: pre_accel,
                 jerk: pre_jerk,
-                accel_only: false,
             });
         }
-        // The first limit is the piece the state is on: the state is judged against the
-        // limits ahead from where it is, so that one is not lowered for them (from the
-        // piece's start, a short piece could never brake for a stop just after it).
-        if let Some(ahead) = w.limits.get_mut(1..) {
-            speed::settle(ahead);
-        }
+        speed::settle(&mut w.limits);
     }
 
     /// Refuses an op that does not start at the previous end point.

@@ -21,11 +21,10 @@
 
 use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
-use crate::geom::AxisBounds;
 use crate::geom::{Metric, PathPoint, Segment};
-use crate::limits::{Dynamics, LimitError};
+use crate::limits::{LimitError, path_limits};
+use crate::profile::PathLimits;
 use klar_interp::SourceLoc;
-use std::sync::Arc as Shared;
 
 /// Largest feed override, as a factor: path limits are prepared for it.
 pub const MAX_OVERRIDE: f64 = 1.5;
@@ -48,65 +47,28 @@ const BLEND_ATTEMPTS: usize = 24;
 /// Shortest blend half-length tried (mm).
 const MIN_BLEND: f64 = 1e-6;
 
-/// Largest turning (radians, path length times the curvature bound) of one piece of an
-/// arc or helix: arcs are cut so that the derivative bounds of each piece are close to the
-/// exact values at every point of it (1.5°), and the speed-dependent limits of time-optimal
-/// path parameterisation ([`crate::limits`]) apply piece by piece.
-const MAX_TURN: f64 = 0.026;
-
-/// Whether blends of gentle corners and of tangent joints are cut like arcs. Off: a blend
-/// keeps the bounds of the whole curve, whose curvature changes fastest of all pieces; the
-/// speed generator's checks stay consistent only when pieces do not change their limits
-/// faster than the state moves through them in a servo period.
-const CUT_BLENDS: bool = false;
-
-/// Most pieces one committed piece is cut into.
-const MAX_CUTS: usize = 4096;
-
-/// Points (plus one) at which the derivative bounds of a cut piece are sampled.
-const RANGE_SAMPLES: usize = 6;
-
 /// The geometry a piece follows.
 #[derive(Debug, Clone)]
 #[allow(clippy::large_enum_variant)] // moved into a queue once; boxing would cost a heap trip
 pub enum Shape {
     /// (Part of) a programmed element.
     Element(Segment),
-    /// A blend curve (shared by the pieces it is cut into), and whether it may be cut:
-    /// blends of sharp corners are not, since their curvature changes too fast for the
-    /// limits of short pieces to hold over a whole servo period.
-    Blend(Shared<Quintic>, bool),
+    /// A blend curve.
+    Blend(Box<Quintic>),
 }
 
 impl Shape {
     fn point(&self, s: f64) -> PathPoint {
         match self {
             Shape::Element(g) => g.point(s),
-            Shape::Blend(q, _) => q.point(s),
+            Shape::Blend(q) => q.point(s),
         }
     }
 
     fn length(&self) -> f64 {
         match self {
             Shape::Element(g) => g.length(),
-            Shape::Blend(q, _) => q.length(),
-        }
-    }
-
-    fn bounds(&self) -> AxisBounds {
-        match self {
-            Shape::Element(g) => g.bounds(),
-            Shape::Blend(q, _) => q.bounds(),
-        }
-    }
-
-    /// True for shapes that are not cut into pieces: lines, splines (their curvature may
-    /// change quickly, like that of blends), and blends that may not be cut.
-    fn is_uncut(&self) -> bool {
-        match self {
-            Shape::Element(Segment::Arc(_)) => false,
-            Shape::Element(_) => true,
-            Shape::Blend(_, cut) => !cut,
+            Shape::Blend(q) => q.length(),
         }
     }
 }
@@ -130,9 +92,9 @@ pub struct Piece {
     pub vmax: f64,
     /// Programmed feed (`None`: rapid).
     pub feed: Option<f64>,
-    /// Speed-dependent acceleration limits.
-    pub dynamics: Dynamics,
-    /// Jerk limit (one for all pieces of a programmed element or blend).
+    /// Path acceleration limit.
+    pub accel: f64,
+    /// Path jerk limit.
     pub jerk: f64,
     /// The block it comes from.
     pub loc: SourceLoc,
@@ -209,151 +171,29 @@ pub enum PieceError {
     Unplannable,
 }
 
-/// Speed limit (top speed, capped by the feed times [`MAX_OVERRIDE`]) and dynamics of the
-/// stretch `[from, from + length]` of `shape` at feed `feed`, from derivative `bounds` over
-/// it.
-fn stretch_dynamics(
-    bounds: &AxisBounds,
-    length: f64,
-    feed: Option<f64>,
-    limits: &[Option<AxisLimits>; 9],
-) -> Result<(f64, Dynamics), PieceError> {
-    let d = Dynamics::new(bounds, length, limits).map_err(|e| match e {
-        LimitError::AbsentAxis(a) => PieceError::Absent(a),
-    })?;
-    let v = d
-        .top_speed()
-        .min(feed.map_or(f64::INFINITY, |f| f * MAX_OVERRIDE));
-    let (a, j) = d.at(v);
-    let usable = |x: f64| x.is_finite() && x > 0.0;
-    if usable(v) && usable(a) && usable(j) && usable(d.rest_accel()) {
-        Ok((v, d))
-    } else {
-        Err(PieceError::Unplannable)
-    }
-}
-
-/// Speed limit and dynamics of a whole shape of `length` at feed `feed` (for checks).
+/// Path limits of a piece of `shape` with `length`, at feed `feed`.
 pub fn piece_limits(
     shape: &Shape,
     length: f64,
     feed: Option<f64>,
     limits: &[Option<AxisLimits>; 9],
-) -> Result<(f64, Dynamics), PieceError> {
-    stretch_dynamics(&shape.bounds(), length, feed, limits)
-}
-
-/// Derivative bounds over `[from, to]` of `shape`: sampled maxima of |q′| and |q″| with the
-/// largest change between samples that the shape's bound of |q‴| allows, and that bound
-/// itself for |q‴|. Never above the shape's own bounds.
-fn range_bounds(shape: &Shape, from: f64, to: f64, whole: &AxisBounds) -> AxisBounds {
-    let mut b = AxisBounds {
-        d3: whole.d3,
-        ..AxisBounds::default()
+) -> Result<PathLimits, PieceError> {
+    let bounds = match shape {
+        Shape::Element(g) => g.bounds(),
+        Shape::Blend(q) => q.bounds(),
     };
-    let h = (to - from) / RANGE_SAMPLES as f64;
-    for k in 0..=RANGE_SAMPLES {
-        let p = shape.point(from + h * k as f64);
-        for i in 0..9 {
-            b.d1[i] = b.d1[i].max(p.d1[i].abs());
-            b.d2[i] = b.d2[i].max(p.d2[i].abs());
-        }
+    let l =
+        path_limits(&bounds, length, limits, feed.map(|f| f * MAX_OVERRIDE)).map_err(
+            |e| match e {
+                LimitError::AbsentAxis(a) => PieceError::Absent(a),
+            },
+        )?;
+    let usable = |x: f64| x.is_finite() && x > 0.0;
+    if usable(l.velocity) && usable(l.acceleration) && usable(l.jerk) {
+        Ok(l)
+    } else {
+        Err(PieceError::Unplannable)
     }
-    for i in 0..9 {
-        // |f| between samples exceeds the larger end value by at most h²/8·max|f″| (d1,
-        // f″ = q‴) or h/2·max|f′| (d2, f′ = q‴).
-        b.d1[i] = (b.d1[i] + 0.125 * h * h * whole.d3[i]).min(whole.d1[i]);
-        b.d2[i] = (b.d2[i] + 0.5 * h * whole.d3[i]).min(whole.d2[i]);
-    }
-    b
-}
-
-/// One piece ready for the queue: geometry, place and limits.
-pub struct Cut {
-    /// The geometry.
-    pub shape: Shape,
-    /// Where on the shape it starts.
-    pub offset: f64,
-    /// Its length.
-    pub length: f64,
-    /// Programmed feed.
-    pub feed: Option<f64>,
-    /// Speed limit (feed times [`MAX_OVERRIDE`] at most).
-    pub vmax: f64,
-    /// Its dynamics.
-    pub dynamics: Dynamics,
-    /// Its jerk limit.
-    pub jerk: f64,
-    /// The block.
-    pub loc: SourceLoc,
-}
-
-/// Cuts the stretch `[offset, offset + length]` of `shape` into pieces of at most
-/// [`MAX_TURN`] turning, each with the limits of its own stretch, and hands them to `out`.
-pub fn cut_piece(
-    shape: Shape,
-    offset: f64,
-    length: f64,
-    feed: Option<f64>,
-    loc: SourceLoc,
-    limits: &[Option<AxisLimits>; 9],
-    mut out: impl FnMut(Cut),
-) -> Result<(), PieceError> {
-    let whole = shape.bounds();
-    let whole_shape = offset <= 0.0 && length >= shape.length() * (1.0 - END_ROUNDING);
-    let turn = length * Metric::Linear.norm(&whole.d2);
-    if shape.is_uncut() || (whole_shape && turn <= MAX_TURN) {
-        let (vmax, dynamics) = stretch_dynamics(&whole, length, feed, limits)?;
-        out(Cut {
-            shape,
-            offset,
-            length,
-            feed,
-            vmax,
-            jerk: dynamics.up_to(vmax, vmax).1,
-            dynamics,
-            loc,
-        });
-        return Ok(());
-    }
-    let n = ((turn / MAX_TURN).ceil() as usize).clamp(1, MAX_CUTS);
-    let h = length / n as f64;
-    // One speed and one jerk limit for all pieces of the stretch (the lowest): the speed
-    // generator then sees them at the stretch's start, and none comes into view only when
-    // the state has passed a lower one (a jerk that fell under a rising speed would carry
-    // it past its limit). The acceleration limits stay those of each piece.
-    let mut cuts = Vec::with_capacity(n);
-    let mut low = f64::INFINITY;
-    for k in 0..n {
-        let from = offset + h * k as f64;
-        // The last piece ends exactly where the stretch does.
-        let len = if k + 1 == n {
-            offset + length - from
-        } else {
-            h
-        };
-        let b = range_bounds(&shape, from, from + len, &whole);
-        let (vmax, dynamics) = stretch_dynamics(&b, len, feed, limits)?;
-        low = low.min(vmax);
-        cuts.push((from, len, dynamics));
-    }
-    let jerk = cuts
-        .iter()
-        .map(|c| c.2.up_to(low, low).1)
-        .fold(f64::INFINITY, f64::min);
-    for (from, len, dynamics) in cuts {
-        out(Cut {
-            shape: shape.clone(),
-            offset: from,
-            length: len,
-            feed,
-            vmax: low,
-            jerk,
-            dynamics,
-            loc,
-        });
-    }
-    Ok(())
 }
 
 fn angle(a: &[f64; 9], b: &[f64; 9]) -> f64 {
@@ -451,7 +291,7 @@ fn too_slow(
     next: &Element,
     limits: &[Option<AxisLimits>; 9],
 ) -> bool {
-    let Ok((bv, bd)) = piece_limits(shape, length, feed, limits) else {
+    let Ok(b) = piece_limits(shape, length, feed, limits) else {
         return true;
     };
     let side = |e: &Element| {
@@ -466,9 +306,8 @@ fn too_slow(
     let (Some(l), Some(r)) = (side(cur), side(next)) else {
         return true;
     };
-    let accel = |v: f64, d: &Dynamics| d.accel(v);
-    bv < SLOW_BLEND * l.0.min(r.0)
-        || accel(bv, &bd) < SLOW_BLEND * accel(l.0, &l.1).min(accel(r.0, &r.1))
+    b.velocity < SLOW_BLEND * l.velocity.min(r.velocity)
+        || b.acceleration < SLOW_BLEND * l.acceleration.min(r.acceleration)
 }
 
 /// The curvature vector to give `mid` at its midpoint when it can become a split point
@@ -571,11 +410,15 @@ fn try_corner(
                 (Some(x), Some(y)) => Some(x.min(y)),
                 (x, y) => x.or(y),
             };
-            let shape = Shape::Blend(Shared::new(curve), CUT_BLENDS && theta <= SPLIT_MAX_ANGLE);
+            let shape = Shape::Blend(Box::new(curve));
             if theta > SPLIT_MAX_ANGLE && too_slow(&shape, length, feed, cur, next, limits) {
                 return None;
             }
-            out.pieces.push((shape, 0.0, length, feed, next.loc));
+            let Shape::Blend(curve) = shape else {
+                return None;
+            };
+            out.pieces
+                .push((Shape::Blend(curve), 0.0, length, feed, next.loc));
             next.trim = dr;
             next.split = right_split;
             return Some(out);

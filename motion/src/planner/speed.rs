@@ -54,9 +54,6 @@ pub struct Limit {
     pub accel: f64,
     /// The smallest jerk limit between the current position and `at`.
     pub jerk: f64,
-    /// True when the limit is there for a lower acceleration limit only: its speed is not
-    /// below the speed limits before it, and the backward pass leaves it out.
-    pub accel_only: bool,
 }
 
 /// What the generator needs to know about the path ahead.
@@ -80,13 +77,6 @@ impl Window {
             .map_or(self.jerk, |l| l.jerk.min(self.jerk))
     }
 }
-
-/// Share of the acceleration and jerk limits with which the backward pass makes the limits
-/// consistent: the speed generator judges and follows them with the full limits, so a
-/// state that met one limit keeps some room for the next when the limits between them
-/// are seen a little differently in a later period (pieces entering or leaving the
-/// look-ahead, speed-dependent limits).
-const SETTLE_SHARE: f64 = 0.9;
 
 /// Bisection steps for the constant-jerk action.
 const BISECTION_STEPS: usize = 20;
@@ -137,32 +127,23 @@ fn misses(x: &Motion, l: &Limit) -> (f64, f64) {
 /// is enough to meet all the others, and each limit's `accel`/`jerk` covers only the
 /// pieces since the limit before it.
 pub fn settle(limits: &mut [Limit]) {
-    // Limits of the acceleration only take no part.
-    let mut next: Option<Limit> = None;
-    for here in limits.iter_mut().rev() {
-        if here.accel_only {
+    for k in (0..limits.len().saturating_sub(1)).rev() {
+        let (here, next) = (limits[k], limits[k + 1]);
+        let room = (next.at - here.at).max(0.0);
+        let brake = |v: f64| Ramp::new(v, 0.0, next.speed, next.accel, next.jerk).distance();
+        if here.speed <= next.speed || brake(here.speed) <= room {
             continue;
         }
-        let Some(after) = next else {
-            next = Some(*here);
-            continue;
-        };
-        let room = (after.at - here.at).max(0.0);
-        let (accel, jerk) = (SETTLE_SHARE * after.accel, SETTLE_SHARE * after.jerk);
-        let brake = |v: f64| Ramp::new(v, 0.0, after.speed, accel, jerk).distance();
-        if here.speed > after.speed && brake(here.speed) > room {
-            let (mut lo, mut hi) = (after.speed, here.speed);
-            for _ in 0..40 {
-                let mid = 0.5 * (lo + hi);
-                if brake(mid) <= room {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
+        let (mut lo, mut hi) = (next.speed, here.speed);
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if brake(mid) <= room {
+                lo = mid;
+            } else {
+                hi = mid;
             }
-            here.speed = lo;
         }
-        next = Some(*here);
+        limits[k].speed = lo;
     }
 }
 
@@ -182,10 +163,8 @@ fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (&'a Limit
             return None;
         }
         let (fast, hard) = misses(x, l);
-        let fast = if ahead && !l.accel_only { 0.0 } else { fast };
-        // The nearest limit of the speed ahead (a limit of the acceleration only keeps the
-        // speed limit of the stretch before it and is judged on its own).
-        if l.at > x.s && !ahead && !l.accel_only {
+        let fast = if ahead { 0.0 } else { fast };
+        if l.at > x.s && !ahead {
             ahead = true;
             covered = slows_for(x, l);
         }
