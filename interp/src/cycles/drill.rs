@@ -14,8 +14,9 @@
 //! - Feeds are mm/min in the definition, dwell times seconds. See [`common`] for FMAX and
 //!   FAUTO.
 //! - The only rapid moves below the set-up clearance re-enter a hole that is already cut,
-//!   stopping short of the depth reached so far (pecking), or follow a deepened starting
-//!   point the programmer declared pre-drilled.
+//!   stopping short of the depth reached so far (pecking), follow a deepened starting
+//!   point the programmer declared pre-drilled, or pass through the existing hole of a back
+//!   boring (204) when its pre-positioning feed is FMAX.
 //!
 //! Old-format cycles 1 and 2 have no surface parameter: they start at the current tool
 //! position, which the program puts at the set-up clearance above the surface.
@@ -23,12 +24,17 @@
 use super::{CycleContext, CycleError, Move, ParamSource};
 
 mod bore;
+mod boring;
 pub(super) mod common;
 mod peck;
 mod simple;
 mod tap;
 #[cfg(test)]
 mod tests;
+#[cfg(test)]
+mod tests_boring;
+#[cfg(test)]
+mod tests_program;
 #[cfg(test)]
 pub(super) mod testutil;
 
@@ -38,7 +44,7 @@ use common::Params;
 pub(super) fn knows(number: u32) -> bool {
     matches!(
         number,
-        1 | 2 | 200 | 201 | 203 | 205 | 206 | 207 | 208 | 209 | 240 | 241
+        1 | 2 | 200 | 201 | 202 | 203 | 204 | 205 | 206 | 207 | 208 | 209 | 240 | 241
     )
 }
 
@@ -61,7 +67,9 @@ pub(super) fn generate(
         2 => tap::old_tapping(&p, ctx, out),
         200 => peck::drilling(&p, ctx, out),
         201 => simple::reaming(&p, ctx, out),
+        202 => boring::boring(&p, ctx, out),
         203 => peck::universal_drilling(&p, ctx, out),
+        204 => boring::back_boring(&p, ctx, out),
         205 => peck::universal_pecking(&p, ctx, out),
         206 => tap::tapping(&p, ctx, out),
         207 => tap::rigid_tapping(&p, ctx, out),

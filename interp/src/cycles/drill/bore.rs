@@ -2,7 +2,7 @@
 
 use std::f64::consts::PI;
 
-use super::common::{EPS, LEN_MAX, MAX_INFEEDS, Params, Path, common};
+use super::common::{EPS, HoleSequence, LEN_MAX, MAX_INFEEDS, Params, Path, common};
 use crate::cycles::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
 use crate::op::SpindleDir;
 
@@ -50,12 +50,13 @@ pub(super) fn bore_milling(
         )));
     }
     let [ca, cb, _] = ctx.pos;
-    let bottom = c.hole.at(c.hole.depth);
+    let seq = HoleSequence::new(&c, feed);
+    let bottom = seq.bottom();
     let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
+    seq.enter(&mut path, &mut ());
     if radius <= EPS {
         path.axis(bottom, feed);
-        path.rapid_axis(c.top);
+        seq.finish(&mut path, &mut ());
         return Ok(());
     }
     if pitch <= 0.0 {
@@ -85,6 +86,6 @@ pub(super) fn bore_milling(
     path.arc(centre, on(end + sign * PI, bottom), ccw, feed);
     path.arc(centre, on(end + sign * 2.0 * PI, bottom), ccw, feed);
     path.line([ca, cb, bottom], feed);
-    path.rapid_axis(c.top);
+    seq.finish(&mut path, &mut ());
     Ok(())
 }

@@ -179,6 +179,13 @@ impl<'a> Params<'a> {
         Ok(v / 60.0)
     }
 
+    /// The plunging feed Q206 as a cycle feed.
+    pub fn plunge_feed(&self) -> Result<CycleFeed, CycleError> {
+        Ok(CycleFeed::Rate(
+            self.cut_feed(206, "feed rate for plunging")?,
+        ))
+    }
+
     /// An optional positioning feed `Qn` that may be FMAX (`+inf`): `None` when absent,
     /// `Some(None)` when 0 (the caller decides what 0 means), `Some(Some(feed))` otherwise.
     pub fn move_feed(&self, q: u32) -> Result<Option<Option<CycleFeed>>, CycleError> {
@@ -244,13 +251,26 @@ pub(in crate::cycles) struct Common {
     pub top: f64,
 }
 
+impl Common {
+    /// The clearance heights of `hole` for the set-up clearance `clearance` and the 2nd
+    /// set-up clearance `second`.
+    pub fn new(hole: Hole, clearance: f64, second: f64) -> Self {
+        Common {
+            hole,
+            clearance,
+            safe: hole.above(clearance),
+            top: hole.above(clearance.max(second)),
+        }
+    }
+}
+
 /// Reads Q200, the depth `depth_q`, Q203 and Q204. `Ok(None)` when the depth is 0: the
 /// manual says the control does not run a cycle programmed with depth 0.
 pub(in crate::cycles) fn common(
     p: &Params<'_>,
     depth_q: u32,
 ) -> Result<Option<Common>, CycleError> {
-    let clearance = p.req(200, "set-up clearance", 0.0, LEN_MAX, "0..=99999.9999")?;
+    let clearance = set_up_clearance(p)?;
     let depth = p.req(
         depth_q,
         "depth",
@@ -258,14 +278,7 @@ pub(in crate::cycles) fn common(
         LEN_MAX,
         "-99999.9999..=99999.9999",
     )?;
-    let surface = p.req(
-        203,
-        "workpiece surface coordinate",
-        -LEN_MAX,
-        LEN_MAX,
-        "-99999.9999..=99999.9999",
-    )?;
-    let second = p.req(204, "2nd set-up clearance", 0.0, LEN_MAX, "0..=99999.9999")?;
+    let (surface, second) = surface_and_second(p)?;
     if depth == 0.0 {
         return Ok(None);
     }
@@ -274,12 +287,92 @@ pub(in crate::cycles) fn common(
         dir: depth.signum(),
         depth: depth.abs(),
     };
+    Ok(Some(Common::new(hole, clearance, second)))
+}
+
+/// Q200, the set-up clearance, ≥ 0.
+pub(in crate::cycles) fn set_up_clearance(p: &Params<'_>) -> Result<f64, CycleError> {
+    p.req(200, "set-up clearance", 0.0, LEN_MAX, "0..=99999.9999")
+}
+
+/// Q203 (workpiece surface coordinate) and Q204 (2nd set-up clearance, ≥ 0).
+pub(in crate::cycles) fn surface_and_second(p: &Params<'_>) -> Result<(f64, f64), CycleError> {
+    let surface = p.req(
+        203,
+        "workpiece surface coordinate",
+        -LEN_MAX,
+        LEN_MAX,
+        "-99999.9999..=99999.9999",
+    )?;
+    let second = p.req(204, "2nd set-up clearance", 0.0, LEN_MAX, "0..=99999.9999")?;
+    Ok((surface, second))
+}
+
+/// [`common`] with the depth Q201 and the plunging feed Q206: the hole sequence of a cycle
+/// that plunges at Q206, `Ok(None)` when the depth is 0.
+pub(in crate::cycles) fn plunged(p: &Params<'_>) -> Result<Option<HoleSequence>, CycleError> {
+    let c = common(p, 201)?;
+    let feed = p.plunge_feed()?;
+    Ok(c.map(|c| HoleSequence::new(&c, feed)))
+}
+
+/// Refuses a deepened starting point Q379 (`start`, from the surface) at or below the
+/// depth of the hole `c`.
+pub(in crate::cycles) fn deepened_start(
+    p: &Params<'_>,
+    start: f64,
+    c: &Common,
+) -> Result<(), CycleError> {
+    if start >= c.hole.depth {
+        return Err(p.geometry(format!(
+            "the deepened starting point Q379={start} is not above the depth {}",
+            c.hole.depth
+        )));
+    }
+    Ok(())
+}
+
+/// Sub-blocks 1 (set-up clearance) and 2 (total hole depth) of the old cycles 1 and 2,
+/// which start at the current tool position `start` (tool axis): that is the set-up
+/// clearance, and the cycle ends there too. The sign of the depth gives the direction; the
+/// clearance is taken by magnitude (programs in the field mix `ABST+1` with `TIEFE-21`).
+/// `Ok(None)` when the depth is 0.
+pub(in crate::cycles) fn old_common(
+    p: &Params<'_>,
+    start: f64,
+) -> Result<Option<Common>, CycleError> {
+    const ANY: &str = "-99999.9999..=99999.9999";
+    let clearance = p
+        .req_key(old_key(1), "set-up clearance", -LEN_MAX, LEN_MAX, ANY)?
+        .abs();
+    let depth = p.req_key(old_key(2), "total hole depth", -LEN_MAX, LEN_MAX, ANY)?;
+    if depth == 0.0 {
+        return Ok(None);
+    }
+    let hole = Hole {
+        surface: start + depth.signum() * clearance,
+        dir: depth.signum(),
+        depth: depth.abs(),
+    };
     Ok(Some(Common {
         hole,
         clearance,
-        safe: hole.above(clearance),
-        top: hole.above(clearance.max(second)),
+        safe: start,
+        top: start,
     }))
+}
+
+/// The optional dwell time of an old-format cycle on sub-block `line`, s (0 when absent).
+pub(in crate::cycles) fn old_dwell(p: &Params<'_>, line: u8) -> Result<f64, CycleError> {
+    match p.raw(old_key(line)) {
+        Some(_) => p.req_key(old_key(line), "dwell time", 0.0, DWELL_MAX, "0..=3600 s"),
+        None => Ok(0.0),
+    }
+}
+
+/// The plain value of sub-block `line` of an old-format cycle.
+pub(in crate::cycles) fn old_key(line: u8) -> ParamKey {
+    ParamKey::Old { line, index: 0 }
 }
 
 /// Rejects Q395 = 1 (depth measured to the cylindrical part of the tool): that needs the
@@ -336,6 +429,16 @@ pub(in crate::cycles) fn reversed(d: SpindleDir) -> SpindleDir {
         SpindleDir::Cw => SpindleDir::Ccw,
         SpindleDir::Ccw => SpindleDir::Cw,
         SpindleDir::Off => SpindleDir::Off,
+    }
+}
+
+/// The direction the spindle cuts in when a cycle switches it on: as at the call (`d`),
+/// M3 when it was stopped.
+pub(in crate::cycles) fn cutting(d: SpindleDir) -> SpindleDir {
+    if d == SpindleDir::Off {
+        SpindleDir::Cw
+    } else {
+        d
     }
 }
 
@@ -400,5 +503,92 @@ impl<'a> Path<'a> {
     /// Spindle direction change.
     pub fn spindle(&mut self, d: SpindleDir) {
         self.out.push(Move::Spindle(d));
+    }
+}
+
+/// What a cycle adds at the fixed points of [`HoleSequence`]: spindle reversals for tapping,
+/// the oriented stop and disengaging move for boring. Every step does nothing by default.
+pub(in crate::cycles) trait HoleSteps {
+    /// At the set-up clearance, after the rapid approach and before the first infeed.
+    fn at_clearance(&mut self, _path: &mut Path<'_>) {}
+    /// At the bottom, after the dwell and before the retraction.
+    fn at_bottom(&mut self, _path: &mut Path<'_>) {}
+    /// After the retraction to the set-up clearance (at the bottom when the sequence has no
+    /// separate retraction), before the rapid move to the 2nd set-up clearance.
+    fn before_top(&mut self, _path: &mut Path<'_>) {}
+}
+
+/// No additional steps.
+impl HoleSteps for () {}
+
+/// The sequence every drilling cycle runs at one hole: rapid along the tool axis to the
+/// set-up clearance, feed to the bottom, dwell there, retract to the set-up clearance and
+/// rapid to the 2nd set-up clearance. Cycles with several infeeds run [`Self::enter`] and
+/// [`Self::finish`] around their own infeeds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(in crate::cycles) struct HoleSequence {
+    /// The hole and its clearance heights.
+    pub c: Common,
+    /// Feed to the bottom.
+    pub feed: CycleFeed,
+    /// Dwell at the bottom, s.
+    pub dwell: f64,
+    /// Feed of the retraction from the bottom to the set-up clearance; `None`: no separate
+    /// retraction, the tool rapids from the bottom straight to the end height.
+    pub retract: Option<CycleFeed>,
+}
+
+impl HoleSequence {
+    /// The hole of `c` drilled at `feed`, without dwell, rapid out.
+    pub fn new(c: &Common, feed: CycleFeed) -> Self {
+        HoleSequence {
+            c: *c,
+            feed,
+            dwell: 0.0,
+            retract: None,
+        }
+    }
+
+    /// Tool-axis coordinate of the bottom of the hole.
+    pub fn bottom(&self) -> f64 {
+        self.c.hole.at(self.c.hole.depth)
+    }
+
+    /// With a dwell of `s` seconds at the bottom.
+    pub fn dwell(self, s: f64) -> Self {
+        HoleSequence { dwell: s, ..self }
+    }
+
+    /// With a retraction at `feed` to the set-up clearance.
+    pub fn retract(self, feed: CycleFeed) -> Self {
+        HoleSequence {
+            retract: Some(feed),
+            ..self
+        }
+    }
+
+    /// Rapid to the set-up clearance, then the cycle's step there.
+    pub fn enter(&self, path: &mut Path<'_>, steps: &mut impl HoleSteps) {
+        path.rapid_axis(self.c.safe);
+        steps.at_clearance(path);
+    }
+
+    /// From the bottom: dwell, the cycle's step there, retract to the set-up clearance,
+    /// the cycle's step before leaving, rapid to the end height.
+    pub fn finish(&self, path: &mut Path<'_>, steps: &mut impl HoleSteps) {
+        path.dwell(self.dwell);
+        steps.at_bottom(path);
+        if let Some(feed) = self.retract {
+            path.axis(self.c.safe, feed);
+        }
+        steps.before_top(path);
+        path.rapid_axis(self.c.top);
+    }
+
+    /// The whole sequence with one infeed to the bottom.
+    pub fn run(&self, path: &mut Path<'_>, steps: &mut impl HoleSteps) {
+        self.enter(path, steps);
+        path.axis(self.bottom(), self.feed);
+        self.finish(path, steps);
     }
 }

@@ -2,7 +2,8 @@
 //! PECKING and the old cycle 1 PECKING.
 
 use super::common::{
-    EPS, Hole, LEN_MAX, MAX_INFEEDS, Params, Path, common, depth_reference_tip, infeed_depths,
+    EPS, HoleSequence, LEN_MAX, MAX_INFEEDS, Params, Path, deepened_start, depth_reference_tip,
+    infeed_depths, old_common, old_dwell, old_key, plunged,
 };
 use crate::cycles::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
 
@@ -29,16 +30,17 @@ pub(super) fn drilling(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let c = common(p, 201)?;
-    let feed = CycleFeed::Rate(p.cut_feed(206, "feed rate for plunging")?);
+    let seq = plunged(p)?;
     let plunge = plunging_depth(p)?;
     let dwell_top = p.dwell(210)?;
     let dwell_bottom = p.dwell(211)?;
     depth_reference_tip(p)?;
-    let Some(c) = c else { return Ok(()) };
+    let Some(seq) = seq else { return Ok(()) };
+    let (c, feed) = (seq.c, seq.feed);
     let depths = infeed_depths(p, 0.0, c.hole.depth, plunge, 0.0, 0.0)?;
+    let seq = seq.dwell(dwell_bottom);
     let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
+    seq.enter(&mut path, &mut ());
     for (i, &d) in depths.iter().enumerate() {
         path.axis(c.hole.at(d), feed);
         if i + 1 == depths.len() {
@@ -48,8 +50,7 @@ pub(super) fn drilling(
         path.dwell(dwell_top);
         path.rapid_axis(c.hole.at(d - c.clearance));
     }
-    path.dwell(dwell_bottom);
-    path.rapid_axis(c.top);
+    seq.finish(&mut path, &mut ());
     Ok(())
 }
 
@@ -68,22 +69,23 @@ pub(super) fn universal_drilling(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let c = common(p, 201)?;
-    let rate = p.cut_feed(206, "feed rate for plunging")?;
-    let feed = CycleFeed::Rate(rate);
+    let seq = plunged(p)?;
     let plunge = plunging_depth(p)?;
     let dwell_top = p.dwell(210)?;
     let decrement = p.opt(212, 0.0, 0.0, LEN_MAX, "0..=99999.9999")?;
     let breaks = p.opt_int(213, 0, 0, 99_999, "0..=99999")?;
     let min_plunge = p.opt(205, 0.0, 0.0, LEN_MAX, "0..=99999.9999")?;
     let dwell_bottom = p.dwell(211)?;
-    let retract = p.move_feed(208)?.flatten().unwrap_or(feed);
+    let retract = p.move_feed(208)?.flatten();
     let chip = p.opt(256, 0.2, 0.0, LEN_MAX, "0..=99999.9999")?;
     depth_reference_tip(p)?;
-    let Some(c) = c else { return Ok(()) };
+    let Some(seq) = seq else { return Ok(()) };
+    let (c, feed) = (seq.c, seq.feed);
+    let retract = retract.unwrap_or(feed);
     let depths = infeed_depths(p, 0.0, c.hole.depth, plunge, decrement, min_plunge)?;
+    let seq = seq.dwell(dwell_bottom).retract(retract);
     let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
+    seq.enter(&mut path, &mut ());
     let mut done_breaks = 0;
     for (i, &d) in depths.iter().enumerate() {
         path.axis(c.hole.at(d), feed);
@@ -100,9 +102,7 @@ pub(super) fn universal_drilling(
             path.rapid_axis(c.hole.at(d - c.clearance));
         }
     }
-    path.dwell(dwell_bottom);
-    path.axis(c.safe, retract);
-    path.rapid_axis(c.top);
+    seq.finish(&mut path, &mut ());
     Ok(())
 }
 
@@ -127,9 +127,7 @@ pub(super) fn universal_pecking(
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
     const LEN: &str = "0..=99999.9999";
-    let c = common(p, 201)?;
-    let rate = p.cut_feed(206, "feed rate for plunging")?;
-    let feed = CycleFeed::Rate(rate);
+    let seq = plunged(p)?;
     let plunge = plunging_depth(p)?;
     let decrement = p.opt(212, 0.0, 0.0, LEN_MAX, LEN)?;
     let min_plunge = p.opt(205, 0.0, 0.0, LEN_MAX, LEN)?;
@@ -139,23 +137,18 @@ pub(super) fn universal_pecking(
     let chip = p.opt(256, 0.2, 0.0, LEN_MAX, LEN)?;
     let dwell_bottom = p.dwell(211)?;
     let deep_start = p.opt(379, 0.0, 0.0, LEN_MAX, LEN)?;
-    let pre = match p.move_feed(253)? {
-        Some(Some(f)) => f,
-        _ => feed,
-    };
-    let retract = match p.move_feed(208)? {
+    let pre = p.move_feed(253)?.flatten();
+    let retract = p.move_feed(208)?;
+    depth_reference_tip(p)?;
+    let Some(seq) = seq else { return Ok(()) };
+    let (c, feed) = (seq.c, seq.feed);
+    let pre = pre.unwrap_or(feed);
+    let retract = match retract {
         None => CycleFeed::Rapid,
         Some(None) => feed,
         Some(Some(f)) => f,
     };
-    depth_reference_tip(p)?;
-    let Some(c) = c else { return Ok(()) };
-    if deep_start >= c.hole.depth {
-        return Err(p.geometry(format!(
-            "the deepened starting point Q379={deep_start} is not above the depth {}",
-            c.hole.depth
-        )));
-    }
+    deepened_start(p, deep_start, &c)?;
     if chip_every > 0.0 && c.hole.depth / chip_every > MAX_INFEEDS as f64 {
         return Err(p.geometry(format!(
             "more than {MAX_INFEEDS} chip breaks for one hole; increase Q257"
@@ -163,8 +156,9 @@ pub(super) fn universal_pecking(
     }
     let depths = infeed_depths(p, deep_start, c.hole.depth, plunge, decrement, min_plunge)?;
     let reentries = depths.len().saturating_sub(1);
+    let seq = seq.dwell(dwell_bottom).retract(retract);
     let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
+    seq.enter(&mut path, &mut ());
     if deep_start > 0.0 {
         path.axis(c.hole.at(deep_start - c.clearance), pre);
     }
@@ -191,9 +185,7 @@ pub(super) fn universal_pecking(
         path.axis(c.safe, retract);
         path.rapid_axis(c.hole.at(d - advance));
     }
-    path.dwell(dwell_bottom);
-    path.axis(c.safe, retract);
-    path.rapid_axis(c.top);
+    seq.finish(&mut path, &mut ());
     Ok(())
 }
 
@@ -213,52 +205,32 @@ pub(super) fn old_pecking(
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
     const ANY: &str = "-99999.9999..=99999.9999";
-    let old = |line: u8| ParamKey::Old { line, index: 0 };
-    let clearance = p
-        .req_key(old(1), "set-up clearance", -LEN_MAX, LEN_MAX, ANY)?
-        .abs();
-    let depth = p.req_key(old(2), "total hole depth", -LEN_MAX, LEN_MAX, ANY)?;
-    let plunge = p.req_key(old(3), "plunging depth", -LEN_MAX, LEN_MAX, ANY)?;
+    let c = old_common(p, ctx.pos[2])?;
+    let plunge = p.req_key(old_key(3), "plunging depth", -LEN_MAX, LEN_MAX, ANY)?;
     if plunge == 0.0 {
-        return Err(p.range_err(old(3), plunge, "a plunging depth other than 0"));
+        return Err(p.range_err(old_key(3), plunge, "a plunging depth other than 0"));
     }
-    let dwell = match p.raw(old(4)) {
-        Some(_) => p.req_key(
-            old(4),
-            "dwell time",
-            0.0,
-            super::common::DWELL_MAX,
-            "0..=3600 s",
-        )?,
-        None => 0.0,
-    };
-    let rate = old_feed(p, ctx, 5)?;
-    if depth == 0.0 {
-        return Ok(());
-    }
-    let start = ctx.pos[2];
-    let hole = Hole {
-        surface: start + depth.signum() * clearance,
-        dir: depth.signum(),
-        depth: depth.abs(),
-    };
+    let dwell = old_dwell(p, 4)?;
+    let feed = CycleFeed::Rate(old_feed(p, ctx, 5)?);
+    let Some(c) = c else { return Ok(()) };
+    let hole = c.hole;
     let advance = if hole.depth <= 30.0 {
         0.6
     } else {
         (hole.depth / 50.0).min(7.0)
     };
     let depths = infeed_depths(p, 0.0, hole.depth, plunge.abs(), 0.0, 0.0)?;
+    let seq = HoleSequence::new(&c, feed).dwell(dwell);
     let mut path = Path::new(out, ctx.pos);
     for (i, &d) in depths.iter().enumerate() {
-        path.axis(hole.at(d), CycleFeed::Rate(rate));
+        path.axis(hole.at(d), feed);
         if i + 1 == depths.len() {
             break;
         }
-        path.rapid_axis(start);
+        path.rapid_axis(c.safe);
         path.rapid_axis(hole.at(d - advance));
     }
-    path.dwell(dwell);
-    path.rapid_axis(start);
+    seq.finish(&mut path, &mut ());
     Ok(())
 }
 

@@ -1,7 +1,7 @@
 //! Single-infeed cycles: 201 REAMING, 240 CENTERING, 241 SINGLE-LIP DEEP-HOLE DRILLING.
 
-use super::common::{LEN_MAX, Params, Path, common};
-use crate::cycles::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
+use super::common::{HoleSteps, LEN_MAX, Params, Path, cutting, deepened_start, plunged};
+use crate::cycles::{CycleContext, CycleError, Move, ParamKey};
 use crate::op::SpindleDir;
 
 /// Cycle 201 REAMING.
@@ -14,17 +14,13 @@ pub(super) fn reaming(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let c = common(p, 201)?;
-    let feed = CycleFeed::Rate(p.cut_feed(206, "feed rate for plunging")?);
+    let seq = plunged(p)?;
     let dwell = p.dwell(211)?;
-    let retract = p.move_feed(208)?.flatten().unwrap_or(feed);
-    let Some(c) = c else { return Ok(()) };
-    let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
-    path.axis(c.hole.at(c.hole.depth), feed);
-    path.dwell(dwell);
-    path.axis(c.safe, retract);
-    path.rapid_axis(c.top);
+    let retract = p.move_feed(208)?.flatten();
+    let Some(seq) = seq else { return Ok(()) };
+    seq.dwell(dwell)
+        .retract(retract.unwrap_or(seq.feed))
+        .run(&mut Path::new(out, ctx.pos), &mut ());
     Ok(())
 }
 
@@ -45,15 +41,10 @@ pub(super) fn centering(
             "Q343=1 (centering to a diameter) needs the tool's point angle, which is not known; program the depth (Q343=0)",
         ));
     }
-    let c = common(p, 201)?;
-    let feed = CycleFeed::Rate(p.cut_feed(206, "feed rate for plunging")?);
+    let seq = plunged(p)?;
     let dwell = p.dwell(211)?;
-    let Some(c) = c else { return Ok(()) };
-    let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
-    path.axis(c.hole.at(c.hole.depth), feed);
-    path.dwell(dwell);
-    path.rapid_axis(c.top);
+    let Some(seq) = seq else { return Ok(()) };
+    seq.dwell(dwell).run(&mut Path::new(out, ctx.pos), &mut ());
     Ok(())
 }
 
@@ -77,12 +68,11 @@ pub(super) fn single_lip(
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
     const LEN: &str = "0..=99999.9999";
-    let c = common(p, 201)?;
-    let feed = CycleFeed::Rate(p.cut_feed(206, "feed rate for plunging")?);
+    let seq = plunged(p)?;
     let dwell = p.dwell(211)?;
     let deep_start = p.opt(379, 0.0, 0.0, LEN_MAX, LEN)?;
-    let pre = p.move_feed(253)?.flatten().unwrap_or(feed);
-    let retract = p.move_feed(208)?.flatten().unwrap_or(feed);
+    let pre = p.move_feed(253)?.flatten();
+    let retract = p.move_feed(208)?.flatten();
     let entry = match p.raw(ParamKey::Q(426)) {
         None => None,
         Some(_) => match p.opt_int(426, 3, 3, 5, "3 (M3), 4 (M4) or 5 (stopped)")? {
@@ -96,42 +86,58 @@ pub(super) fn single_lip(
     p.opt(429, 0.0, 0.0, 999.0, "0..=999")?;
     p.opt(430, 0.0, 0.0, 999.0, "0..=999")?;
     let dwell_depth = p.opt(435, 0.0, 0.0, LEN_MAX, LEN)?;
-    let Some(c) = c else { return Ok(()) };
-    if deep_start >= c.hole.depth {
-        return Err(p.geometry(format!(
-            "the deepened starting point Q379={deep_start} is not above the depth {}",
-            c.hole.depth
-        )));
-    }
-    let entry = entry.unwrap_or(ctx.spindle);
-    let drill = if ctx.spindle == SpindleDir::Off {
-        SpindleDir::Cw
-    } else {
-        ctx.spindle
+    let Some(seq) = seq else { return Ok(()) };
+    let (c, feed) = (seq.c, seq.feed);
+    deepened_start(p, deep_start, &c)?;
+    let (pre, retract) = (pre.unwrap_or(feed), retract.unwrap_or(feed));
+    let drill = cutting(ctx.spindle);
+    let seq = seq.dwell(dwell).retract(retract);
+    let mut spindle = EntrySpindle {
+        now: ctx.spindle,
+        entry: entry.unwrap_or(ctx.spindle),
     };
-    let mut spindle = ctx.spindle;
     let mut path = Path::new(out, ctx.pos);
-    let mut set = |path: &mut Path<'_>, d: SpindleDir| {
-        if d != spindle {
-            path.spindle(d);
-            spindle = d;
-        }
-    };
-    path.rapid_axis(c.safe);
-    set(&mut path, entry);
+    seq.enter(&mut path, &mut spindle);
     if deep_start > 0.0 {
         path.axis(c.hole.at(deep_start - c.clearance), pre);
     }
-    set(&mut path, drill);
+    spindle.set(&mut path, drill);
     if dwell_depth > deep_start && dwell_depth < c.hole.depth {
         path.axis(c.hole.at(dwell_depth), feed);
         path.dwell(dwell);
     }
-    path.axis(c.hole.at(c.hole.depth), feed);
-    path.dwell(dwell);
-    set(&mut path, entry);
-    path.axis(c.safe, retract);
-    path.rapid_axis(c.top);
-    set(&mut path, ctx.spindle);
+    path.axis(seq.bottom(), feed);
+    seq.finish(&mut path, &mut spindle);
+    spindle.set(&mut path, ctx.spindle);
     Ok(())
+}
+
+/// The spindle of cycle 241: switched to the entry/exit direction at the set-up clearance
+/// and again at the bottom before the retraction; a switch to the direction it already
+/// turns in emits nothing.
+struct EntrySpindle {
+    /// Direction now.
+    now: SpindleDir,
+    /// Entry/exit direction (Q426).
+    entry: SpindleDir,
+}
+
+impl EntrySpindle {
+    /// Switches to `d` unless the spindle already turns that way.
+    fn set(&mut self, path: &mut Path<'_>, d: SpindleDir) {
+        if d != self.now {
+            path.spindle(d);
+            self.now = d;
+        }
+    }
+}
+
+impl HoleSteps for EntrySpindle {
+    fn at_clearance(&mut self, path: &mut Path<'_>) {
+        self.set(path, self.entry);
+    }
+
+    fn at_bottom(&mut self, path: &mut Path<'_>) {
+        self.set(path, self.entry);
+    }
 }

@@ -1,7 +1,10 @@
 //! Tapping: 206 TAPPING (floating tap holder), 207 RIGID TAPPING, 209 TAPPING WITH CHIP
 //! BREAKING, old cycle 2 TAPPING.
 
-use super::common::{DWELL_MAX, Hole, LEN_MAX, Params, Path, common, infeed_depths, reversed};
+use super::common::{
+    HoleSequence, HoleSteps, LEN_MAX, Params, Path, common, infeed_depths, old_common, old_dwell,
+    plunged, reversed,
+};
 use super::peck::old_feed;
 use crate::cycles::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
 use crate::op::SpindleDir;
@@ -27,19 +30,14 @@ pub(super) fn tapping(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let c = common(p, 201)?;
-    let feed = CycleFeed::Rate(p.cut_feed(206, "feed rate for plunging")?);
+    let seq = plunged(p)?;
     let dwell = p.dwell(211)?;
-    let Some(c) = c else { return Ok(()) };
+    let Some(seq) = seq else { return Ok(()) };
     need_spindle(p, ctx)?;
-    let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
-    path.axis(c.hole.at(c.hole.depth), feed);
-    path.dwell(dwell);
-    path.spindle(reversed(ctx.spindle));
-    path.axis(c.safe, feed);
-    path.spindle(ctx.spindle);
-    path.rapid_axis(c.top);
+    seq.dwell(dwell).retract(seq.feed).run(
+        &mut Path::new(out, ctx.pos),
+        &mut Reversal::new(ctx, ctx.spindle),
+    );
     Ok(())
 }
 
@@ -66,19 +64,48 @@ pub(super) fn rigid_tapping(
     let Some(c) = c else { return Ok(()) };
     need_speed(p, ctx)?;
     let feed = CycleFeed::PerRev(pitch);
-    let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
-    if ctx.spindle != hand {
-        path.spindle(hand);
-    }
-    path.axis(c.hole.at(c.hole.depth), feed);
-    path.spindle(reversed(hand));
-    path.axis(c.safe, feed);
-    if ctx.spindle != reversed(hand) {
-        path.spindle(ctx.spindle);
-    }
-    path.rapid_axis(c.top);
+    HoleSequence::new(&c, feed)
+        .retract(feed)
+        .run(&mut Path::new(out, ctx.pos), &mut Reversal::new(ctx, hand));
     Ok(())
+}
+
+/// The spindle of a tapping cycle: turned to the hand of the thread at the set-up
+/// clearance (when it turns the other way at the call), reversed at the bottom to leave the
+/// thread, and back to the direction of the call at the set-up clearance.
+struct Reversal {
+    /// Direction at the call.
+    call: SpindleDir,
+    /// Direction that enters the thread.
+    hand: SpindleDir,
+}
+
+impl Reversal {
+    /// A thread of `hand` tapped from the spindle state of `ctx`.
+    fn new(ctx: &CycleContext, hand: SpindleDir) -> Self {
+        Reversal {
+            call: ctx.spindle,
+            hand,
+        }
+    }
+}
+
+impl HoleSteps for Reversal {
+    fn at_clearance(&mut self, path: &mut Path<'_>) {
+        if self.call != self.hand {
+            path.spindle(self.hand);
+        }
+    }
+
+    fn at_bottom(&mut self, path: &mut Path<'_>) {
+        path.spindle(reversed(self.hand));
+    }
+
+    fn before_top(&mut self, path: &mut Path<'_>) {
+        if self.call != reversed(self.hand) {
+            path.spindle(self.call);
+        }
+    }
 }
 
 /// Reads the pitch Q239 of a rigid tapping cycle; returns the spindle direction for
@@ -130,11 +157,10 @@ pub(super) fn tapping_chip_breaking(
     let feed = CycleFeed::PerRev(pitch);
     let step = if infeed > 0.0 { infeed } else { c.hole.depth };
     let depths = infeed_depths(p, 0.0, c.hole.depth, step, 0.0, 0.0)?;
+    let seq = HoleSequence::new(&c, feed).retract(feed);
+    let mut spindle = Reversal::new(ctx, hand);
     let mut path = Path::new(out, ctx.pos);
-    path.rapid_axis(c.safe);
-    if ctx.spindle != hand {
-        path.spindle(hand);
-    }
+    seq.enter(&mut path, &mut spindle);
     for (i, &d) in depths.iter().enumerate() {
         path.axis(c.hole.at(d), feed);
         if i + 1 == depths.len() {
@@ -148,12 +174,7 @@ pub(super) fn tapping_chip_breaking(
         }
         path.spindle(hand);
     }
-    path.spindle(reversed(hand));
-    path.axis(c.safe, feed);
-    if ctx.spindle != reversed(hand) {
-        path.spindle(ctx.spindle);
-    }
-    path.rapid_axis(c.top);
+    seq.finish(&mut path, &mut spindle);
     Ok(())
 }
 
@@ -168,32 +189,14 @@ pub(super) fn old_tapping(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    const ANY: &str = "-99999.9999..=99999.9999";
-    let old = |line: u8| ParamKey::Old { line, index: 0 };
-    let clearance = p
-        .req_key(old(1), "set-up clearance", -LEN_MAX, LEN_MAX, ANY)?
-        .abs();
-    let depth = p.req_key(old(2), "total hole depth", -LEN_MAX, LEN_MAX, ANY)?;
-    let dwell = match p.raw(old(3)) {
-        Some(_) => p.req_key(old(3), "dwell time", 0.0, DWELL_MAX, "0..=3600 s")?,
-        None => 0.0,
-    };
+    let c = old_common(p, ctx.pos[2])?;
+    let dwell = old_dwell(p, 3)?;
     let feed = CycleFeed::Rate(old_feed(p, ctx, 4)?);
-    if depth == 0.0 {
-        return Ok(());
-    }
+    let Some(c) = c else { return Ok(()) };
     need_spindle(p, ctx)?;
-    let start = ctx.pos[2];
-    let hole = Hole {
-        surface: start + depth.signum() * clearance,
-        dir: depth.signum(),
-        depth: depth.abs(),
-    };
-    let mut path = Path::new(out, ctx.pos);
-    path.axis(hole.at(hole.depth), feed);
-    path.dwell(dwell);
-    path.spindle(reversed(ctx.spindle));
-    path.axis(start, feed);
-    path.spindle(ctx.spindle);
+    HoleSequence::new(&c, feed).dwell(dwell).retract(feed).run(
+        &mut Path::new(out, ctx.pos),
+        &mut Reversal::new(ctx, ctx.spindle),
+    );
     Ok(())
 }

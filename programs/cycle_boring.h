@@ -1,0 +1,41 @@
+0  BEGIN PGM CYCLE_BORING MM
+; Boring cycle 202 makes two through holes; back boring cycle 204 then cuts a
+; counterbore 5 deep into the underside of the first one. Both cycles stop the spindle
+; oriented at the bottom and move the cutting edge off the wall (Q214 = 1: towards -X)
+; before the tool leaves the hole.
+1  BLK FORM 0.1 Z X+0 Y+0 Z-20
+2  BLK FORM 0.2 X+100 Y+100 Z+0
+3  TOOL DEF 1 L+80 R+6
+4  TOOL DEF 2 L+90 R+4
+5  TOOL CALL 1 Z S800 F100
+6  L Z+50 R0 FMAX M3
+7  CYCL DEF 202 BORING ~
+    Q200=+2    ;SET-UP CLEARANCE ~
+    Q201=-22   ;DEPTH ~
+    Q206=+100  ;FEED RATE FOR PLNGNG ~
+    Q211=+0.5  ;DWELL TIME AT DEPTH ~
+    Q208=+250  ;RETRACTION FEED RATE ~
+    Q203=+0    ;SURFACE COORDINATE ~
+    Q204=+50   ;2ND SET-UP CLEARANCE ~
+    Q214=+1    ;DISENGAGING DIRECTN ~
+    Q336=+0    ;ANGLE OF SPINDLE
+8  L X+25 Y+25 R0 FMAX M99
+9  L X+75 Y+25 R0 FMAX M99
+10 TOOL CALL 2 Z S600 F80
+11 L Z+50 R0 FMAX M3
+12 CYCL DEF 204 BACK BORING ~
+    Q200=+2    ;SET-UP CLEARANCE ~
+    Q249=+5    ;DEPTH OF COUNTERBORE ~
+    Q250=+20   ;MATERIAL THICKNESS ~
+    Q251=+3.5  ;OFF-CENTER DISTANCE ~
+    Q252=+15   ;TOOL EDGE HEIGHT ~
+    Q253=+750  ;F PRE-POSITIONING ~
+    Q254=+200  ;F COUNTERBORING ~
+    Q255=+0.5  ;DWELL TIME ~
+    Q203=+0    ;SURFACE COORDINATE ~
+    Q204=+50   ;2ND SET-UP CLEARANCE ~
+    Q214=+1    ;DISENGAGING DIRECTN ~
+    Q336=+0    ;ANGLE OF SPINDLE
+13 L X+25 Y+25 R0 FMAX M99
+14 L Z+100 R0 FMAX M5
+15 END PGM CYCLE_BORING MM
