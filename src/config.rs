@@ -8,6 +8,9 @@
 use klar_drivers::cia402::{CanOpenConfig, DriveConfig};
 use klar_drivers::modbus::{ModbusServoConfig, ModbusVfdConfig};
 use klar_drivers::stepdir::StepDirConfig;
+use klar_interp::op::{
+    BUILT_IN_M_NUMBERS, MAX_MACHINE_FUNCTION, MachineFunctionDef, MachineFunctionTime,
+};
 use klar_interp::{AxisLetter, Diagnostic, Interpreter, Pose, Tool, ToolTable};
 use klar_motion::AxisLimits;
 use klar_motion::kinematics::{Cartesian, Kinematics, Lathe, TableTable, TiltAxis};
@@ -286,6 +289,32 @@ pub struct MachineConfig {
     /// stops on the path, s (default [`DEFAULT_LATENESS_PERIODS`] servo periods).
     #[serde(default)]
     pub max_setpoint_lateness: Option<f64>,
+    /// The machine's own M functions (`[[m_function]]`): M numbers programs may use
+    /// besides the ones klar defines.
+    #[serde(default, rename = "m_function")]
+    pub m_functions: Vec<MFunctionConfig>,
+}
+
+/// A machine-dependent M function (door, clamping, chip conveyor, …), `[[m_function]]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MFunctionConfig {
+    /// The M number, 0 to 9999, not one klar defines itself.
+    pub number: i64,
+    /// Text shown in the log when it acts.
+    #[serde(default)]
+    pub name: String,
+    /// When in its block it acts: `"start"` (before the motion) or `"end"` (after it, the
+    /// default).
+    #[serde(default)]
+    pub at: MachineFunctionTime,
+    /// The path comes to rest exactly before the function acts (default true). Without a
+    /// stop it is switched on the fly and `wait` is not applied.
+    #[serde(default = "default_true")]
+    pub stop: bool,
+    /// Seconds the machine waits after the function before it goes on (default 0).
+    #[serde(default)]
+    pub wait: f64,
 }
 
 /// Default setpoint lateness that ends a run, in servo periods. Drives in cyclic synchronous
@@ -468,7 +497,9 @@ impl MachineConfig {
     /// Opens a program for this machine: the interpreter with the machine's tool table.
     pub fn open_program(&self, program: &Path, start: Pose) -> Result<Interpreter, Diagnostic> {
         // PLANE and cycle 19 compute angles for the machine's rotary axes.
-        let interp = Interpreter::open(program, start)?.with_rotary_axes(&self.letters());
+        let interp = Interpreter::open(program, start)?
+            .with_rotary_axes(&self.letters())
+            .with_machine_functions(&self.machine_functions());
         Ok(match self.tool_table() {
             Ok(Some(table)) => interp.with_tools(table),
             // A bad table file was refused when the machine file was loaded.
@@ -606,6 +637,7 @@ impl MachineConfig {
                 return Err(format!("fault {:?}: duration must be seconds > 0", f.kind));
             }
         }
+        self.validate_m_functions()?;
         if let Some(l) = self.max_setpoint_lateness
             && !(l.is_finite() && l >= self.servo_period)
         {
@@ -680,6 +712,56 @@ impl MachineConfig {
             .values()
             .any(|c| matches!(c.bus, BusConfig::Socketcan { .. } | BusConfig::Slcan { .. }));
         modbus_spindle || modbus_axis || real_stepdir || real_can
+    }
+
+    /// The machine's own M functions as the interpreter takes them.
+    pub fn machine_functions(&self) -> Vec<MachineFunctionDef> {
+        self.m_functions
+            .iter()
+            .filter_map(|m| {
+                Some(MachineFunctionDef {
+                    number: u32::try_from(m.number).ok()?,
+                    at: m.at,
+                    stop: m.stop,
+                    wait: m.wait,
+                })
+            })
+            .collect()
+    }
+
+    /// The name of machine function `number` for the log (empty when it has none).
+    pub fn machine_function_name(&self, number: u32) -> &str {
+        self.m_functions
+            .iter()
+            .find(|m| m.number == i64::from(number))
+            .map_or("", |m| m.name.as_str())
+    }
+
+    fn validate_m_functions(&self) -> Result<(), String> {
+        for (i, m) in self.m_functions.iter().enumerate() {
+            let n = m.number;
+            if !(0..=i64::from(MAX_MACHINE_FUNCTION)).contains(&n) {
+                return Err(format!(
+                    "m_function M{n}: the number must lie in 0..={MAX_MACHINE_FUNCTION}"
+                ));
+            }
+            if BUILT_IN_M_NUMBERS.iter().any(|&b| i64::from(b) == n) {
+                return Err(format!(
+                    "m_function M{n}: klar defines M{n} itself; a machine function needs \
+                     another number"
+                ));
+            }
+            if self.m_functions[..i].iter().any(|o| o.number == n) {
+                return Err(format!("m_function M{n} is defined twice"));
+            }
+            if !(m.wait.is_finite() && m.wait >= 0.0) {
+                return Err(format!(
+                    "m_function M{n}: wait must be seconds >= 0, got {}",
+                    m.wait
+                ));
+            }
+        }
+        Ok(())
     }
 
     /// The axis letters in machine order.

@@ -199,7 +199,16 @@ fn cmd_check(program: &Path, machine: Option<&Path>, quiet: bool) -> ExitCode {
     if machine.is_some() {
         return cmd_test_run(program, &config);
     }
-    let report = klar_interp::check_report(program, start_pose(&config));
+    // the machine's own M functions are known M numbers
+    let report = match klar_interp::Interpreter::open(program, start_pose(&config)) {
+        Ok(it) => it
+            .with_machine_functions(&config.machine_functions())
+            .check_report(),
+        Err(d) => klar_interp::CheckReport {
+            errors: vec![d],
+            ..Default::default()
+        },
+    };
     for m in &report.missing {
         eprintln!("{m} (warning: a run stops here)");
     }
@@ -228,7 +237,7 @@ fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCod
         return ExitCode::FAILURE;
     }
     let start = start_pose(&config);
-    let interp = match config.open_program(program, start) {
+    let mut interp = match config.open_program(program, start) {
         Ok(i) => i,
         Err(d) => {
             print_diagnostics(&[d]);
@@ -238,6 +247,11 @@ fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCod
     let stdout = std::io::stdout();
     let mut out = BufWriter::new(stdout.lock());
     let mut comp = compensated.then(|| Compensator::new(start));
+    // Ops of a tilted working plane reach the output in workpiece coordinates: turned after
+    // the compensation (which runs in the tilted plane) or, without it, by the tilt stage alone.
+    interp.set_working_plane_ops(true);
+    let mut tilt = klar_motion::tilt::TiltStage::new();
+    let mut turned = std::collections::VecDeque::new();
     let mut write = |op: &klar_interp::Op| -> bool {
         match serde_json::to_string(op) {
             Ok(line) => writeln!(out, "{line}").is_ok(),
@@ -261,8 +275,11 @@ fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCod
         };
         match comp.as_mut() {
             None => {
-                if !write(&op) {
-                    return ExitCode::FAILURE;
+                tilt.push(op, &mut turned);
+                while let Some(o) = turned.pop_front() {
+                    if !write(&o) {
+                        return ExitCode::FAILURE;
+                    }
                 }
             }
             Some(c) => {

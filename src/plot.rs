@@ -51,9 +51,17 @@ pub struct Stroke {
 /// Flattens a program's motion (the programmed contour) into strokes.
 pub fn toolpath(program: &Path, start: Pose) -> Result<Vec<Stroke>, PlotError> {
     let mut strokes = Strokes::default();
-    for op in open(program, start)? {
+    let mut interp = open(program, start)?;
+    // A tilted working plane: the programmed contour turned into the workpiece system.
+    interp.set_working_plane_ops(true);
+    let mut tilt = klar_motion::tilt::TiltStage::new();
+    let mut turned = std::collections::VecDeque::new();
+    for op in interp {
         let op = op.map_err(|d| PlotError::Program(vec![d]))?;
-        strokes.add(&op);
+        tilt.push(op, &mut turned);
+        while let Some(op) = turned.pop_front() {
+            strokes.add(&op);
+        }
     }
     Ok(strokes.done())
 }
@@ -73,7 +81,10 @@ pub fn tool_centre_path(program: &Path, start: Pose) -> Result<Vec<Stroke>, Plot
             message: e.to_string(),
         }])
     };
-    for op in open(program, start)? {
+    let mut interp = open(program, start)?;
+    // Compensation runs in a tilted working plane; the compensator turns its output.
+    interp.set_working_plane_ops(true);
+    for op in interp {
         let op = op.map_err(|d| PlotError::Program(vec![d]))?;
         let loc = op.loc;
         comp.push(op).map_err(|e| comp_error(e, loc))?;

@@ -443,6 +443,19 @@ impl Run<'_, '_> {
                 );
                 Ok(())
             }
+            OpKind::MachineFunction { number, stop, wait } => {
+                // The simulated machine has nothing to switch: the function is logged; the
+                // planner has already stopped the path and holds it for `wait`.
+                tracing::info!(
+                    line = op.loc.line,
+                    number,
+                    name = self.config.machine_function_name(*number),
+                    stop,
+                    wait,
+                    "machine function M{number}"
+                );
+                Ok(())
+            }
             other => {
                 tracing::debug!(line = op.loc.line, ?other, "event");
                 Ok(())

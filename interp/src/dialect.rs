@@ -22,6 +22,8 @@ pub(crate) trait DialectRun: Iterator<Item = Result<Op, Diagnostic>> + Send {
     fn last_position(&self) -> Pose;
     /// Switches block skip (`/` blocks) on or off.
     fn set_block_skip(&mut self, on: bool);
+    /// The machine's own M functions; a dialect without them ignores the list.
+    fn set_machine_functions(&mut self, _defs: &[crate::op::MachineFunctionDef]) {}
 }
 
 /// A HEIDENHAIN program language.

@@ -287,6 +287,28 @@ impl Interpreter {
         self
     }
 
+    /// Tells the interpreter the machine's own M functions (Klartext and TNC ISO programs):
+    /// a listed number is passed on as [`crate::op::OpKind::MachineFunction`] at block start
+    /// or end as defined, instead of being refused as not supported. Entries with a number
+    /// klar defines itself ([`crate::op::BUILT_IN_M_NUMBERS`]) are ignored.
+    pub fn with_machine_functions(mut self, defs: &[crate::op::MachineFunctionDef]) -> Self {
+        self.machine.set_machine_functions(defs);
+        if let Some(o) = &mut self.other {
+            o.set_machine_functions(defs);
+        }
+        self
+    }
+
+    /// Working-plane ops (`on`): in a tilted working plane (PLANE, cycle 19) the ops stay in
+    /// the tilted system and [`crate::OpKind::WorkingPlane`] marks each change of the plane,
+    /// so that radius compensation (RL/RR, APPR/DEP) can run in the tilted plane before the
+    /// ops are turned into the workpiece system (klar-motion's compensation stage does both).
+    /// Off (the default), ops leave in workpiece coordinates and RL/RR, APPR and DEP are
+    /// refused while a plane is tilted. Klartext programs only.
+    pub fn set_working_plane_ops(&mut self, on: bool) {
+        self.machine.set_working_plane_ops(on);
+    }
+
     /// Uses `table` for datum shifts from a datum table (`CYCL DEF 7.1 #n`).
     pub fn with_datum_table(mut self, table: DatumTable) -> Self {
         self.machine.set_datum_table(table);
@@ -929,6 +951,8 @@ impl Interpreter {
     /// block with an error is skipped) with this interpreter's tools and machine settings.
     pub fn check_report(mut self) -> CheckReport {
         self.machine.set_dry_run(true);
+        // A check keeps no coordinates: compensation in a tilted plane is allowed as in a run.
+        self.machine.set_working_plane_ops(true);
         let errors = self.run_all(Mode::Check);
         CheckReport {
             errors,

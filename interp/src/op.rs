@@ -215,6 +215,40 @@ pub enum CornerRule {
     Open,
 }
 
+/// M numbers klar itself gives a meaning to in Klartext and TNC ISO programs; a machine file
+/// cannot define them as machine functions.
+pub const BUILT_IN_M_NUMBERS: &[u32] = &[
+    0, 1, 2, 3, 4, 5, 6, 8, 9, 13, 14, 30, 89, 91, 92, 97, 98, 99, 126, 127, 128, 129, 140,
+];
+
+/// Highest M number a machine function may have.
+pub const MAX_MACHINE_FUNCTION: u32 = 9999;
+
+/// When within its block a machine function acts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MachineFunctionTime {
+    /// Before the block's motion.
+    Start,
+    /// After the block's motion.
+    #[default]
+    End,
+}
+
+/// A machine-dependent M function as the machine defines it (see
+/// [`OpKind::MachineFunction`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MachineFunctionDef {
+    /// The M number.
+    pub number: u32,
+    /// When in its block it acts.
+    pub at: MachineFunctionTime,
+    /// True when the path stops exactly before it acts.
+    pub stop: bool,
+    /// Seconds the machine waits after it (with `stop` only), finite and ≥ 0.
+    pub wait: f64,
+}
+
 /// Side of tool radius compensation, looking in the direction of travel.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -467,6 +501,29 @@ pub enum OpKind {
         /// True for on.
         on: bool,
     },
+    /// The tilted working plane (PLANE, cycle 19) in effect for the following ops, which are
+    /// then in the tilted system: a point `p` of them lies at `rotation · p` in the untilted
+    /// workpiece system (columns: the tilted X, Y, Z axes in workpiece coordinates). The
+    /// identity resets the tilt. Only an interpreter asked for it emits this op
+    /// (`Interpreter::set_working_plane_ops`); the radius compensation stage of motion
+    /// compensates in the tilted system and turns its output into the workpiece system.
+    WorkingPlane {
+        /// Rotation matrix, row-major.
+        rotation: [[f64; 3]; 3],
+    },
+    /// A machine-dependent M function the machine file defines (door, clamping, chip
+    /// conveyor, …): the interpreter passes its number on at block start or block end, as
+    /// the machine file says. With `stop` the path comes to rest before it acts (as for a
+    /// tool change) and the machine then waits `wait` seconds; without `stop` it is an
+    /// event on the path (like coolant) and `wait` does not hold the motion.
+    MachineFunction {
+        /// The M number.
+        number: u32,
+        /// True when the path stops exactly before the function acts.
+        stop: bool,
+        /// Seconds the machine waits after the function (with `stop` only).
+        wait: f64,
+    },
     /// Program stop (M0, STOP) or optional stop (M1): motion halts until resumed.
     Stop {
         /// True for M1 (only when optional stop is switched on).
@@ -477,6 +534,13 @@ pub enum OpKind {
 }
 
 impl OpKind {
+    /// This op of a working plane tilted by `rotation` (see [`OpKind::WorkingPlane`]) in the
+    /// untilted workpiece system: X Y Z of its points turned, an arc as lines within
+    /// 1 µm of it, a spline with turned coefficients; ops without points unchanged.
+    pub fn in_workpiece(&self, rotation: &[[f64; 3]; 3]) -> Vec<OpKind> {
+        crate::klartext::plane_output::tilt_kind(rotation, self)
+    }
+
     /// True for ops that move axes.
     pub fn is_motion(&self) -> bool {
         matches!(

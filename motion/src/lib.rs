@@ -19,6 +19,7 @@ pub mod kinematics;
 pub mod limits;
 pub mod planner;
 pub mod profile;
+pub mod tilt;
 
 pub use axis::{
     AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError, Setpoint, SpindleBackend,

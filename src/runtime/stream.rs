@@ -43,11 +43,13 @@ impl OpStream {
     /// A stream over `interp`, compensating from `start`; `max_rpm` limits surface-speed
     /// conversions.
     pub(crate) fn new(
-        interp: Interpreter,
+        mut interp: Interpreter,
         start: Pose,
         max_rpm: f64,
         path: &std::path::Path,
     ) -> Self {
+        // Compensation runs in a tilted working plane; the compensator turns its output.
+        interp.set_working_plane_ops(true);
         Self {
             interp,
             comp: Compensator::new(start),

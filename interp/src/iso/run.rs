@@ -424,4 +424,8 @@ impl DialectRun for IsoProgram {
     fn set_block_skip(&mut self, on: bool) {
         self.block_skip = on;
     }
+
+    fn set_machine_functions(&mut self, defs: &[crate::op::MachineFunctionDef]) {
+        self.state.machine.set_machine_functions(defs);
+    }
 }

@@ -10,7 +10,8 @@
 //! M functions and their timing within the block (TNC M-function table): M3, M4, M8, M13,
 //! M14 act at block start (before the motion); M5 and M9 at block end; M0 (stop, spindle off,
 //! coolant off), M1 (optional stop) and M2/M30 (end, spindle off, coolant off) after the
-//! block's motion. Any other M is reported as not supported.
+//! block's motion. Other M numbers are the machine's own functions when its configuration
+//! lists them (see the `mfunc` module), else they are reported as not supported.
 
 use std::collections::VecDeque;
 
@@ -186,6 +187,8 @@ pub(crate) struct Machine {
     pub(super) tilt: super::plane::PlaneState,
     /// FK free contour elements waiting for data, FPOL pole, solved FK elements.
     pub(super) fk: super::fk_solve::FkState,
+    /// Machine-dependent M functions from the machine configuration.
+    pub(super) machine_functions: Vec<crate::op::MachineFunctionDef>,
 }
 
 /// An execution error located at a word of the block.
@@ -235,6 +238,7 @@ impl Machine {
             cyc: Default::default(),
             tilt: Default::default(),
             fk: Default::default(),
+            machine_functions: Vec::new(),
         }
     }
 
@@ -362,7 +366,9 @@ impl Machine {
         out: &mut VecDeque<Op>,
     ) -> Result<Flow, ExecError> {
         let mark = out.len();
-        let mut r = self.exec_inner(stmt, parsed, text, loc, out);
+        let mut r = self
+            .check_m_numbers(stmt, parsed)
+            .and_then(|()| self.exec_inner(stmt, parsed, text, loc, out));
         if r.is_ok()
             && let Err(e) = self.check_mapping(out)
         {

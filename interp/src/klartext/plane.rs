@@ -17,8 +17,17 @@
 //! an op carries is turned by the plane's rotation into the untilted workpiece system after
 //! the coordinate transforms of the cycles (datum shift, mirror, rotation, scaling), i.e. the
 //! tilt is the last stage and turns about the workpiece datum. Arcs of a tilted plane leave
-//! their principal plane, so they are passed on as chains of lines within 1 µm. Splines,
-//! APPR/DEP and radius compensation are refused while a plane is tilted.
+//! their principal plane, so they are passed on as chains of lines within 1 µm; splines keep
+//! their form with turned coefficients.
+//!
+//! Radius compensation (RL/RR) and APPR/DEP must work in the tilted plane, before the turn.
+//! So the interpreter can leave the turn to motion (working-plane ops, see
+//! [`super::plane_output`]): the ops then stay in the tilted system, an
+//! [`OpKind::WorkingPlane`] op marks where each new plane takes effect, and the compensation
+//! stage offsets the contour in the tilted plane and turns its output. The rotary-axis moves
+//! of PLANE … MOVE/TURN come after that op, expressed in the new plane. Without
+//! working-plane ops, RL/RR and APPR/DEP are refused while a plane is tilted. Either way the
+//! plane cannot change while compensation is on: the contour would run through two planes.
 //!
 //! The workpiece coordinates reach the machine through the kinematics' tool-tip
 //! transformation, so any PLANE other than RESET switches it on ([`OpKind::Tcpm`]); PLANE
@@ -41,8 +50,9 @@ use super::expr::{ParamKind, ParamRef, Value};
 use super::lexer::{Lexer, TokKind};
 use super::parser::{PResult, Parser, Stmt, required, unexpected, upper};
 use super::plane_math::{self as pm, Choice, IDENTITY, M3, Tilt};
+use super::plane_output::turn;
 use crate::diag::ProgramError;
-use crate::op::{AxisLetter, Feed, Op, OpKind, Pose, SourceLoc};
+use crate::op::{AxisLetter, CompSide, Feed, Op, OpKind, Pose, SourceLoc};
 
 /// The PLANE form.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -334,6 +344,9 @@ pub(crate) struct PlaneState {
     pub pre: usize,
     /// Lines of a tilted arc still to hand out.
     pub pending: VecDeque<Op>,
+    /// Working-plane ops on: ops stay in the tilted system, [`OpKind::WorkingPlane`] marks
+    /// each change (see [`super::plane_output`]).
+    pub deferred: bool,
 }
 
 impl Default for PlaneState {
@@ -347,6 +360,7 @@ impl Default for PlaneState {
             kin_on: false,
             pre: 0,
             pending: VecDeque::new(),
+            deferred: false,
         }
     }
 }
@@ -509,6 +523,7 @@ impl Machine {
         } else {
             self.feed.map_or(Feed::Rapid, Feed::Rate)
         };
+        self.plane_change_allowed(&r)?;
         let moves = w.positioning != Some(Positioning::Stay) && tilt.is_some();
         let dist = w.vals[DIST].map(|_| val(self, DIST) * self.unit);
         self.apply_plane(r, tilt, angles, moves.then_some((feed, dist)), out, loc);
@@ -569,8 +584,31 @@ impl Machine {
             self.tilt.plane_tcpm = false;
             self.sync_tcpm(&mut emit);
         }
-        for kind in emitted {
-            out.push_back(Op { kind, loc });
+        if self.tilt.deferred {
+            // The new plane holds from here on; the rotary moves above are workpiece
+            // coordinates, expressed in it.
+            if r != self.tilt.r {
+                out.push_back(Op {
+                    kind: OpKind::WorkingPlane { rotation: r },
+                    loc,
+                });
+            }
+            let back = pm::transpose(&r);
+            for kind in emitted {
+                let kind = match kind {
+                    OpKind::Line { from, to, feed } => OpKind::Line {
+                        from: turn(&back, &from),
+                        to: turn(&back, &to),
+                        feed,
+                    },
+                    other => other,
+                };
+                out.push_back(Op { kind, loc });
+            }
+        } else {
+            for kind in emitted {
+                out.push_back(Op { kind, loc });
+            }
         }
         self.cyc.pre_mapped = out.len();
         self.tilt.pre = out.len();
@@ -590,6 +628,19 @@ impl Machine {
         machine[AxisLetter::Y] = back[1];
         machine[AxisLetter::Z] = back[2];
         self.pos = self.cyc.xf.unmap_point(&machine);
+    }
+
+    /// Refuses to change the working plane to `r` while radius compensation is on: the
+    /// compensated contour would run through two planes.
+    fn plane_change_allowed(&self, r: &M3) -> Result<(), ExecError> {
+        if self.comp != CompSide::Off && *r != self.tilt.r {
+            return Err(here(ProgramError::Plane(
+                "the working plane cannot change while radius compensation is on; \
+                 cancel it with R0 or DEP first"
+                    .into(),
+            )));
+        }
+        Ok(())
     }
 
     /// The present position in untilted workpiece coordinates (after the cycle transforms).
@@ -693,6 +744,7 @@ impl Machine {
             abc[slot] = it.value.map_or(0.0, |v| self.params.value(v));
         }
         let r = pm::spatial(abc[0], abc[1], abc[2]);
+        self.plane_change_allowed(&r)?;
         let reset = pm::is_identity(&r, 0.0);
         let tilt = match self.machine_tilt() {
             Ok(t) => Some(t),

@@ -4,14 +4,27 @@
 //! Points (X Y Z of every pose) are multiplied by the plane's rotation; the other axes pass
 //! unchanged. An arc of a tilted plane no longer lies in XY, ZX or YZ, so it becomes a chain
 //! of lines whose chords stay within [`ARC_CHORD_TOLERANCE`] of the arc (helices and other
-//! axes move in proportion to the angle, as the arc op defines).
+//! axes move in proportion to the angle, as the arc op defines). A spline stays a spline:
+//! its polynomial is linear in its coefficients, so the X, Y, Z coefficient vectors of each
+//! power of t are turned like points and the turned polynomial is exactly the turned curve.
+//!
+//! Two ways to use it:
+//! - By default the interpreter applies it itself as ops leave its queue
+//!   ([`Machine::tilt_output`]), so its users see workpiece coordinates only. Radius
+//!   compensation (RL/RR, APPR/DEP) is then refused in a tilted plane, since it would run
+//!   after the tilt, in the wrong plane.
+//! - With working-plane ops on (`Interpreter::set_working_plane_ops`) the interpreter leaves
+//!   the ops in the tilted system and marks each change of the plane with
+//!   [`OpKind::WorkingPlane`] where it takes effect in the stream. The radius compensation of
+//!   motion then compensates in the tilted system and turns its output with [`tilt_kind`]
+//!   (through [`OpKind::in_workpiece`]).
 
 use std::collections::VecDeque;
 
 use super::exec::{ExecError, Machine, here};
 use super::plane_math::{self as pm, M3};
 use crate::diag::ProgramError;
-use crate::op::{AxisLetter, CompSide, Op, OpKind, Pose};
+use crate::op::{AxisLetter, CompSide, Op, OpKind, Pose, SplineAxis};
 
 /// Largest distance (mm) between a tilted arc and the lines that replace it.
 pub const ARC_CHORD_TOLERANCE: f64 = 0.001;
@@ -19,7 +32,8 @@ pub const ARC_CHORD_TOLERANCE: f64 = 0.001;
 /// Most lines one arc becomes.
 const MAX_ARC_LINES: f64 = 100_000.0;
 
-fn turn(r: &M3, p: &Pose) -> Pose {
+/// `p` with X Y Z turned by `r` (the other axes unchanged).
+pub(super) fn turn(r: &M3, p: &Pose) -> Pose {
     let v = pm::apply(r, [p[AxisLetter::X], p[AxisLetter::Y], p[AxisLetter::Z]]);
     let mut out = *p;
     out[AxisLetter::X] = v[0];
@@ -28,9 +42,54 @@ fn turn(r: &M3, p: &Pose) -> Pose {
     out
 }
 
-/// The ops `kind` becomes under the rotation `r` (one, or the lines of an arc).
+/// The ops `kind` becomes under the rotation `r` (one, or the lines of an arc). APPR and DEP
+/// have their points turned but keep their plane: they are meant to be resolved (by the
+/// radius compensation) before the tilt.
 pub(crate) fn tilt_kind(r: &M3, kind: &OpKind) -> Vec<OpKind> {
     match kind {
+        OpKind::Spline {
+            from,
+            to,
+            axes,
+            feed,
+        } => vec![OpKind::Spline {
+            from: turn(r, from),
+            to: turn(r, to),
+            axes: turn_spline(r, axes),
+            feed: *feed,
+        }],
+        OpKind::Approach {
+            from,
+            to,
+            shape,
+            side,
+            feed_to_aux,
+            feed,
+            plane,
+            with_tool_axis,
+        } => vec![OpKind::Approach {
+            from: turn(r, from),
+            to: turn(r, to),
+            shape: *shape,
+            side: *side,
+            feed_to_aux: *feed_to_aux,
+            feed: *feed,
+            plane: *plane,
+            with_tool_axis: *with_tool_axis,
+        }],
+        OpKind::Depart {
+            from,
+            to,
+            shape,
+            feed,
+            plane,
+        } => vec![OpKind::Depart {
+            from: turn(r, from),
+            to: to.as_ref().map(|p| turn(r, p)),
+            shape: *shape,
+            feed: *feed,
+            plane: *plane,
+        }],
         OpKind::Line { from, to, feed } => vec![OpKind::Line {
             from: turn(r, from),
             to: turn(r, to),
@@ -56,6 +115,38 @@ pub(crate) fn tilt_kind(r: &M3, kind: &OpKind) -> Vec<OpKind> {
             .collect(),
         other => vec![other.clone()],
     }
+}
+
+/// Spline coefficients turned by `r`: the X, Y, Z coefficients of each power of t form a
+/// vector that turns like a point (the other axes keep theirs). An axis of X, Y, Z appears
+/// in the result when it had coefficients or gets non-zero ones.
+fn turn_spline(r: &M3, axes: &[SplineAxis]) -> Vec<SplineAxis> {
+    let mut k = [[0.0; 3]; 3]; // k[power][X/Y/Z]
+    let mut present = [false; 3];
+    let mut out = Vec::with_capacity(axes.len() + 2);
+    for ax in axes {
+        let i = ax.axis.index();
+        if i < 3 {
+            present[i] = true;
+            for (row, value) in k.iter_mut().zip(ax.k) {
+                row[i] = value;
+            }
+        } else {
+            out.push(*ax);
+        }
+    }
+    let turned = k.map(|row| pm::apply(r, row));
+    for (i, letter) in [AxisLetter::X, AxisLetter::Y, AxisLetter::Z]
+        .into_iter()
+        .enumerate()
+    {
+        let c = [turned[0][i], turned[1][i], turned[2][i]];
+        if present[i] || c.iter().any(|v| *v != 0.0) {
+            out.push(SplineAxis { axis: letter, k: c });
+        }
+    }
+    out.sort_by_key(|a| a.axis);
+    out
 }
 
 /// Points along an arc op, start and end included, chords within the tolerance.
@@ -100,7 +191,8 @@ impl Machine {
     /// Tilts the queued ops not yet tilted (after mapping them with the cycle transforms),
     /// so that they keep the plane that was active when they were programmed.
     pub(super) fn premap_queue(&mut self, out: &mut VecDeque<Op>) {
-        if self.tilt.identity && self.cyc.identity {
+        let tilt_here = !self.tilt.identity && !self.tilt.deferred;
+        if !tilt_here && self.cyc.identity {
             self.cyc.pre_mapped = out.len();
             self.tilt.pre = out.len();
             return;
@@ -112,7 +204,7 @@ impl Machine {
             } else {
                 op.kind
             };
-            if i >= self.tilt.pre && !self.tilt.identity {
+            if i >= self.tilt.pre && tilt_here {
                 for k in tilt_kind(&self.tilt.r, &kind) {
                     mapped.push_back(Op {
                         kind: k,
@@ -129,13 +221,14 @@ impl Machine {
     }
 
     /// Output hook: turns an op leaving the queue into the workpiece system. An arc's first
-    /// line is returned, the rest wait in [`Machine::tilt_pending`].
+    /// line is returned, the rest wait in [`Machine::tilt_pending`]. With working-plane ops
+    /// on, ops leave in the tilted system unchanged.
     pub fn tilt_output(&mut self, op: Op) -> Op {
         if self.tilt.pre > 0 {
             self.tilt.pre -= 1;
             return op;
         }
-        if self.tilt.identity {
+        if self.tilt.identity || self.tilt.deferred {
             return op;
         }
         let mut lines = tilt_kind(&self.tilt.r, &op.kind).into_iter();
@@ -159,14 +252,22 @@ impl Machine {
         self.tilt.pending.pop_front()
     }
 
-    /// Refuses the ops from `mark` on that cannot be tilted (while a plane is tilted).
+    /// Leaves the ops in the tilted system and marks each change of the working plane with
+    /// [`OpKind::WorkingPlane`] (`on`), or turns them into the workpiece system here (the
+    /// default). Meant to be set before the program runs.
+    pub fn set_working_plane_ops(&mut self, on: bool) {
+        self.tilt.deferred = on;
+    }
+
+    /// Refuses the ops from `mark` on that cannot be tilted here (while a plane is tilted and
+    /// the tilt is applied by the interpreter): radius compensation and APPR/DEP, which must
+    /// run in the tilted plane, before the tilt.
     pub(super) fn check_tilt(&self, out: &VecDeque<Op>, mark: usize) -> Result<(), ExecError> {
-        if self.tilt.identity {
+        if self.tilt.identity || self.tilt.deferred {
             return Ok(());
         }
         for op in out.iter().skip(mark.max(self.tilt.pre)) {
             let what = match &op.kind {
-                OpKind::Spline { .. } => "SPL",
                 OpKind::Approach { .. } => "APPR",
                 OpKind::Depart { .. } => "DEP",
                 OpKind::RadiusComp { side } if *side != CompSide::Off => {
@@ -175,7 +276,8 @@ impl Machine {
                 _ => continue,
             };
             return Err(here(ProgramError::NotSupported(format!(
-                "{what} in a tilted working plane"
+                "{what} in a tilted working plane (here the plane is turned before the \
+                 radius compensation)"
             ))));
         }
         Ok(())

@@ -31,6 +31,11 @@
 //! - [`OpKind::CornerRule`] (M97/M98 in a block) applies to the corner at the end of the
 //!   next contour element (module `corner` has the rules); it is consumed here.
 //!
+//! - Tilted working plane: after [`OpKind::WorkingPlane`] the ops are in the tilted system;
+//!   compensation works there, and the output is turned into the workpiece system by
+//!   [`crate::tilt::TiltStage`] as it is popped (the interpreter refuses a plane change
+//!   while compensation is on).
+//!
 //! Not handled here: paraxial R+/R−, which the interpreter resolves.
 //!
 //! Streaming: an element's tool path is known once the next element is in (its end corner
@@ -107,6 +112,12 @@ pub struct Compensator {
     failed: bool,
     /// The corner rule for the end of the next contour element.
     rule: Option<CornerRule>,
+    /// The working plane of the ops coming in (see [`crate::tilt`]).
+    in_plane: crate::tilt::Rotation,
+    /// Turns released ops into the workpiece system.
+    tilt: crate::tilt::TiltStage,
+    /// Released ops in the workpiece system, ready to pop.
+    tilted: VecDeque<Op>,
 }
 
 impl Compensator {
@@ -133,6 +144,9 @@ impl Compensator {
             finished: false,
             failed: false,
             rule: None,
+            in_plane: crate::tilt::IDENTITY,
+            tilt: crate::tilt::TiltStage::new(),
+            tilted: VecDeque::new(),
         }
     }
 
@@ -176,17 +190,23 @@ impl Compensator {
         Ok(())
     }
 
-    /// The next op of the tool-centre stream, in order.
+    /// The next op of the tool-centre stream, in order, in workpiece coordinates.
     pub fn pop(&mut self) -> Option<Op> {
         if self.failed {
             return None;
         }
-        self.out.pop_front()
+        loop {
+            if let Some(op) = self.tilted.pop_front() {
+                return Some(op);
+            }
+            let op = self.out.pop_front()?;
+            self.tilt.push(op, &mut self.tilted);
+        }
     }
 
     /// True while no op is ready to pop and input is still open: push more.
     pub fn needs_input(&self) -> bool {
-        !self.finished && !self.failed && self.out.is_empty()
+        !self.finished && !self.failed && self.out.is_empty() && self.tilted.is_empty()
     }
 
     /// The working plane used for compensation (from the last tool change's tool axis).
@@ -324,6 +344,13 @@ impl Compensator {
                 _ => Err(CompError::SplineCompensated { loc }),
             },
             OpKind::Line { .. } | OpKind::Arc { .. } => self.motion(op),
+            OpKind::WorkingPlane { rotation } => {
+                // The tool stands where it stood; from here on in the new plane's terms.
+                self.pos = crate::tilt::reexpress(&self.in_plane, rotation, &self.pos);
+                self.in_plane = *rotation;
+                self.route(Trail::Pass(op));
+                Ok(())
+            }
             _ => {
                 self.route(Trail::Pass(op));
                 Ok(())

@@ -380,7 +380,30 @@ impl Planner {
                 self.add_event(op);
                 return Ok(());
             }
-            OpKind::Coolant { .. } | OpKind::RadiusComp { .. } | OpKind::CornerRule { .. } => {
+            OpKind::MachineFunction {
+                stop: true, wait, ..
+            } => {
+                // A machine function that needs the machine standing: exact stop on its
+                // point, the function, then the machine holds for `wait` seconds.
+                let wait = *wait;
+                if !(wait.is_finite() && wait >= 0.0) {
+                    return Err(MotionError::BadDwell { loc, seconds: wait });
+                }
+                self.flush()?;
+                self.markers.push_back(Marker::Stop {
+                    at: self.committed_end,
+                    op: Some(op),
+                    dwell: wait,
+                });
+                return Ok(());
+            }
+            // A machine function without stop is an event on the path like coolant; it has
+            // no standstill to wait in, so its `wait` is not applied.
+            OpKind::Coolant { .. }
+            | OpKind::RadiusComp { .. }
+            | OpKind::CornerRule { .. }
+            | OpKind::WorkingPlane { .. }
+            | OpKind::MachineFunction { stop: false, .. } => {
                 self.add_event(op);
                 return Ok(());
             }
