@@ -42,6 +42,9 @@ const ARC_CURVE_SHARE: f64 = 0.8;
 /// left in quadrature for the path jerk and c₃·V³).
 const ARC_JERK_SHARE: f64 = 0.6;
 
+/// A moving axis: its limits, c₁, c₂, c₃ and the turning part W of c₁.
+type Moving = (AxisLimits, f64, f64, f64, f64);
+
 /// Why no path limits exist for a segment.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum LimitError {
@@ -57,7 +60,7 @@ pub fn path_limits(
     limits: &[Option<AxisLimits>; 9],
     feed: Option<f64>,
 ) -> Result<PathLimits, LimitError> {
-    let mut moving: [Option<(AxisLimits, f64, f64, f64, f64)>; 9] = [None; 9];
+    let mut moving: [Option<Moving>; 9] = [None; 9];
     for (i, axis) in AxisLetter::ALL.into_iter().enumerate() {
         let (c1, c2, c3) = (bounds.d1[i], bounds.d2[i], bounds.d3[i]);
         // An axis moves when its excursion along the segment is measurable.
