@@ -544,7 +544,12 @@ impl Planner {
                     if let Some(Marker::Stop { op, dwell, .. }) = self.markers.pop_front() {
                         if dwell > 0.0 {
                             let loc = op.as_ref().map_or(self.rest_loc, |o| o.loc);
-                            self.hold_until = Some((self.time() + dwell, loc));
+                            // Holds at the same point add up (two dwells, a dwell and
+                            // a machine function's wait).
+                            let from = self
+                                .hold_until
+                                .map_or(self.time(), |(end, _)| end.max(self.time()));
+                            self.hold_until = Some((from + dwell, loc));
                         }
                         if let Some(op) = op {
                             return Some(Step::Event(op));
