@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 /// The `k`-th of `n` chord end points on a circle of radius `r` through the origin (centre
 /// at X−r), rounded to 1 µm as a post-processor prints them; the last one is the origin.
 fn rounded_point(r: f64, n: usize, k: usize) -> Pose {
-    if k % n == 0 {
+    if k.is_multiple_of(n) {
         return Pose::xyz(0.0, 0.0, 0.0);
     }
     let phi = 2.0 * PI * k as f64 / n as f64;
