@@ -224,7 +224,7 @@ impl Quintic {
         for k in 0..=BOUND_SAMPLES {
             let d = self.derivs(k as f64 / BOUND_SAMPLES as f64);
             let sigma = dot(&d.d1, &d.d1).sqrt();
-            if !(sigma >= min_speed) {
+            if sigma.is_nan() || sigma < min_speed {
                 return None;
             }
             let (t1, t2, t3) = arc_derivs(&d, &self.moving);
