@@ -9,7 +9,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 cd "$here/.."
 cargo build --release --quiet --bin klar
-klar="target/release/klar"
+klar="${CARGO_TARGET_DIR:-target}/release/klar"
 
 work="$(mktemp -d)"
 trap 'rm -rf "$work"' EXIT

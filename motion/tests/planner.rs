@@ -249,6 +249,35 @@ fn dwell_holds_the_corner_exactly_for_its_time() {
 }
 
 #[test]
+fn dwells_at_the_same_point_add_up() {
+    let cfg = config(limits_xyz(100.0, 1000.0, 20_000.0));
+    let a = Pose::ZERO;
+    let b = Pose::xyz(10.0, 0.0, 0.0);
+    let c = Pose::xyz(10.0, 10.0, 0.0);
+    let r = run(
+        cfg,
+        a,
+        vec![
+            line(1, a, b, Feed::Rate(50.0)),
+            op(2, OpKind::Dwell { seconds: 0.25 }),
+            op(3, OpKind::Dwell { seconds: 0.3 }),
+            line(4, b, c, Feed::Rate(50.0)),
+        ],
+    );
+    let held: Vec<_> = r
+        .samples
+        .iter()
+        .filter(|s| s.loc.line == 2 || s.loc.line == 3)
+        .collect();
+    // 0.25 s + 0.3 s, give or take the cycle in which the move ended.
+    assert!((550..=551).contains(&held.len()), "{}", held.len());
+    for s in &held {
+        assert_eq!(s.pose, b);
+        assert_eq!(s.velocity, [0.0; 9]);
+    }
+}
+
+#[test]
 fn events_arrive_in_order_when_they_take_effect() {
     let (vmax, amax, jmax) = (100.0, 1000.0, 20_000.0);
     let cfg = config(limits_xyz(vmax, amax, jmax));

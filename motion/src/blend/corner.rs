@@ -39,14 +39,16 @@ pub fn blend_within(
     contour: &[ContourPart<'_>],
     tolerance: f64,
 ) -> Option<(Quintic, f64)> {
-    let curve = Quintic::hermite(start, end)?;
+    // The tolerance check needs only the curve's shape; the rest is computed once it passes.
+    let curve = Quintic::shape(start, end)?;
     let limit = TOLERANCE_SHARE * tolerance;
+    let polylines: Vec<Polyline> = contour.iter().map(Polyline::through).collect();
     let mut worst = 0.0f64;
     for k in 1..DEVIATION_SAMPLES {
         let p = curve.pose_at_parameter(k as f64 / DEVIATION_SAMPLES as f64);
-        let d = contour
+        let d = polylines
             .iter()
-            .map(|part| distance_to_part(&p, part))
+            .map(|line| line.distance(&p))
             .fold(f64::INFINITY, f64::min);
         // NaN distances count as too far.
         if d.is_nan() || d > limit {
@@ -54,31 +56,51 @@ pub fn blend_within(
         }
         worst = worst.max(d);
     }
-    Some((curve, worst))
+    Some((curve.finish()?, worst))
 }
 
 /// Distance (over X Y Z U V W) from `p` to a stretch of an element; never less than the
 /// true distance.
 pub fn distance_to_part(p: &Pose, part: &ContourPart<'_>) -> f64 {
-    let (a, b) = (part.from.min(part.to), part.from.max(part.to));
-    match part.segment {
-        Segment::Line(_) => {
-            distance_to_chord(p, &part.segment.position(a), &part.segment.position(b))
-        }
-        seg => {
-            let bounds = seg.bounds();
-            let kappa = Metric::Linear.norm(&bounds.d2);
-            let h = (b - a) / CURVE_CHORDS as f64;
-            let sagitta = h * h * kappa / 8.0;
-            let mut prev = seg.position(a);
-            let mut best = f64::INFINITY;
-            for k in 1..=CURVE_CHORDS {
-                let next = seg.position(a + h * k as f64);
-                best = best.min(distance_to_chord(p, &prev, &next));
-                prev = next;
+    Polyline::through(part).distance(p)
+}
+
+/// A stretch of an element as chords through it, with the largest distance of the stretch
+/// from its chords (0 for a line).
+struct Polyline {
+    points: Vec<Pose>,
+    sagitta: f64,
+}
+
+impl Polyline {
+    fn through(part: &ContourPart<'_>) -> Polyline {
+        let (a, b) = (part.from.min(part.to), part.from.max(part.to));
+        match part.segment {
+            Segment::Line(_) => Polyline {
+                points: vec![part.segment.position(a), part.segment.position(b)],
+                sagitta: 0.0,
+            },
+            seg => {
+                let bounds = seg.bounds();
+                let kappa = Metric::Linear.norm(&bounds.d2);
+                let h = (b - a) / CURVE_CHORDS as f64;
+                Polyline {
+                    points: (0..=CURVE_CHORDS)
+                        .map(|k| seg.position(a + h * k as f64))
+                        .collect(),
+                    sagitta: h * h * kappa / 8.0,
+                }
             }
-            best + sagitta
         }
+    }
+
+    /// Distance from `p`, never less than the true distance from the stretch.
+    fn distance(&self, p: &Pose) -> f64 {
+        self.points
+            .windows(2)
+            .map(|w| distance_to_chord(p, &w[0], &w[1]))
+            .fold(f64::INFINITY, f64::min)
+            + self.sagitta
     }
 }
 

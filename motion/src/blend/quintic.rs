@@ -35,6 +35,9 @@ pub struct Quintic {
     /// Arc length from u = 0 to u = i / TABLE_INTERVALS.
     table: [f64; TABLE_INTERVALS + 1],
     bounds: AxisBounds,
+    /// Pose indices whose coordinate changes along the curve (the others stay at `c[i][0]`
+    /// and are skipped when evaluating).
+    moving: [bool; 9],
 }
 
 /// P and its first three u-derivatives at one parameter value.
@@ -54,6 +57,12 @@ impl Quintic {
     /// and curvature vector (`d2`). `None` when the ends coincide, a value is not finite or
     /// the curve has a cusp.
     pub fn hermite(start: &PathPoint, end: &PathPoint) -> Option<Quintic> {
+        Quintic::shape(start, end)?.finish()
+    }
+
+    /// The curve's coefficients only: enough for [`Quintic::pose_at_parameter`], which the
+    /// tolerance check needs before the rest ([`Quintic::finish`]) is worth computing.
+    pub(crate) fn shape(start: &PathPoint, end: &PathPoint) -> Option<Quintic> {
         let mut chord = [0.0; 9];
         for (i, c) in chord.iter_mut().enumerate() {
             *c = end.pose.0[i] - start.pose.0[i];
@@ -79,20 +88,31 @@ impl Quintic {
         if !c.iter().flatten().all(|x| x.is_finite()) {
             return None;
         }
-        let mut q = Quintic {
+        let mut moving = [false; 9];
+        for (m, ci) in moving.iter_mut().zip(&c) {
+            *m = ci[1..].iter().any(|x| *x != 0.0);
+        }
+        Some(Quintic {
             c,
             from: start.pose,
             to: end.pose,
             table: [0.0; TABLE_INTERVALS + 1],
             bounds: AxisBounds::default(),
-        };
-        // Refuse cusps: the parameter speed must stay well away from zero.
-        for k in 0..=BOUND_SAMPLES {
-            let u = k as f64 / BOUND_SAMPLES as f64;
-            if q.speed(u) < MIN_PARAMETER_SPEED * lambda {
-                return None;
-            }
+            moving,
+        })
+    }
+
+    /// Completes a curve from [`Quintic::shape`]: refuses cusps, tabulates the arc length
+    /// and samples the derivative bounds.
+    pub(crate) fn finish(mut self) -> Option<Quintic> {
+        let mut chord = [0.0; 9];
+        for (i, c) in chord.iter_mut().enumerate() {
+            *c = self.to.0[i] - self.from.0[i];
         }
+        let lambda = Metric::Linear.norm(&chord);
+        let q = &mut self;
+        // Refuse cusps: the parameter speed must stay well away from zero.
+        q.bounds = q.sample_bounds(MIN_PARAMETER_SPEED * lambda)?;
         let mut table = [0.0; TABLE_INTERVALS + 1];
         arclen::fill_table(&mut table, |u| q.speed(u));
         q.table = table;
@@ -100,8 +120,7 @@ impl Quintic {
         if !(total.is_finite() && total > 0.0) {
             return None;
         }
-        q.bounds = q.sample_bounds();
-        Some(q)
+        Some(self)
     }
 
     fn derivs(&self, u: f64) -> Derivs {
@@ -112,6 +131,10 @@ impl Quintic {
             d3: [0.0; 9],
         };
         for (i, c) in self.c.iter().enumerate() {
+            if !self.moving[i] {
+                d.p[i] = c[0];
+                continue;
+            }
             d.p[i] = c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * (c[4] + u * c[5]))));
             d.d1[i] =
                 c[1] + u * (2.0 * c[2] + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5])));
@@ -125,6 +148,9 @@ impl Quintic {
     fn speed(&self, u: f64) -> f64 {
         let mut sum = 0.0;
         for &i in Metric::Linear.axes() {
+            if !self.moving[i] {
+                continue;
+            }
             let c = &self.c[i];
             let d1 = c[1] + u * (2.0 * c[2] + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5])));
             sum += d1 * d1;
@@ -157,7 +183,7 @@ impl Quintic {
     pub fn point(&self, s: f64) -> PathPoint {
         let u = self.parameter_at(s);
         let d = self.derivs(u);
-        let (t1, t2, _) = arc_derivs(&d);
+        let (t1, t2, _) = arc_derivs(&d, &self.moving);
         let pose = if u <= 0.0 {
             self.from
         } else if u >= 1.0 {
@@ -174,7 +200,16 @@ impl Quintic {
 
     /// The pose at parameter `u` ∈ [0, 1].
     pub fn pose_at_parameter(&self, u: f64) -> Pose {
-        Pose(self.derivs(u.clamp(0.0, 1.0)).p)
+        let u = u.clamp(0.0, 1.0);
+        let mut p = [0.0; 9];
+        for (i, (x, c)) in p.iter_mut().zip(&self.c).enumerate() {
+            *x = if self.moving[i] {
+                c[0] + u * (c[1] + u * (c[2] + u * (c[3] + u * (c[4] + u * c[5]))))
+            } else {
+                c[0]
+            };
+        }
+        Pose(p)
     }
 
     /// Bounds of |dⁿq/dsⁿ| per axis, n = 1, 2, 3 (sampled maxima times a margin).
@@ -182,11 +217,17 @@ impl Quintic {
         self.bounds
     }
 
-    fn sample_bounds(&self) -> AxisBounds {
+    /// The sampled bounds; `None` when the parameter speed falls below `min_speed` at a
+    /// sample (a cusp).
+    fn sample_bounds(&self, min_speed: f64) -> Option<AxisBounds> {
         let mut b = AxisBounds::default();
         for k in 0..=BOUND_SAMPLES {
             let d = self.derivs(k as f64 / BOUND_SAMPLES as f64);
-            let (t1, t2, t3) = arc_derivs(&d);
+            let sigma = dot(&d.d1, &d.d1).sqrt();
+            if sigma.is_nan() || sigma < min_speed {
+                return None;
+            }
+            let (t1, t2, t3) = arc_derivs(&d, &self.moving);
             for i in 0..9 {
                 b.d1[i] = b.d1[i].max(t1[i].abs());
                 b.d2[i] = b.d2[i].max(t2[i].abs());
@@ -203,13 +244,13 @@ impl Quintic {
                 *x = x.min(1.0);
             }
         }
-        b
+        Some(b)
     }
 }
 
 /// First three derivatives with respect to arc length from the u-derivatives:
 /// with σ = |P′|, T₁ = P′/σ, T₂ = P″/σ² − P′σ′/σ³ and T₃ = (dT₂/du)/σ.
-fn arc_derivs(d: &Derivs) -> ([f64; 9], [f64; 9], [f64; 9]) {
+fn arc_derivs(d: &Derivs, moving: &[bool; 9]) -> ([f64; 9], [f64; 9], [f64; 9]) {
     let sigma = dot(&d.d1, &d.d1).sqrt().max(f64::MIN_POSITIVE);
     let s1 = dot(&d.d1, &d.d2) / sigma;
     let s2 = (dot(&d.d2, &d.d2) + dot(&d.d1, &d.d3) - s1 * s1) / sigma;
@@ -223,6 +264,9 @@ fn arc_derivs(d: &Derivs) -> ([f64; 9], [f64; 9], [f64; 9]) {
     let mut t2 = [0.0; 9];
     let mut t3 = [0.0; 9];
     for i in 0..9 {
+        if !moving[i] {
+            continue;
+        }
         let (x, y, z) = (d.d1[i], d.d2[i], d.d3[i]);
         t1[i] = x * i1;
         t2[i] = y * i2 - x * s1 * i3;

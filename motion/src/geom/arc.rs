@@ -156,6 +156,7 @@ impl Arc {
         let w = (self.theta / self.length).abs();
         let r = self.radius;
         for (i, fix) in [(self.p, self.end_fix[0]), (self.q, self.end_fix[1])] {
+            b.wave[i] = r * w;
             b.d1[i] = r * w + (fix / self.length).abs();
             b.d2[i] = r * w * w;
             b.d3[i] = r * w * w * w;

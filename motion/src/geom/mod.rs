@@ -83,6 +83,12 @@ pub struct AxisBounds {
     pub d2: [f64; 9],
     /// max |d³q/ds³| per axis.
     pub d3: [f64; 9],
+    /// Amplitude of the part of dq/ds that turns with the angle on the in-plane axes of an
+    /// arc or helix (0 elsewhere). There `q′ = −W·sin θ + o`, `q″ = −d2·cos θ` and
+    /// `q‴ = d3·sin θ` with `W = wave`, `o = d1 − W` a constant, so the speed and curvature
+    /// terms of an axis's acceleration and jerk peak at different angles and add in
+    /// quadrature (see [`crate::limits`]).
+    pub wave: [f64; 9],
 }
 
 /// Geometry an op describes that cannot be followed.

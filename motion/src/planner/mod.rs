@@ -481,9 +481,14 @@ impl Planner {
             let l = piece_limits(&shape, length, feed, &self.config.limits)
                 .map_err(|e| piece_error(e, loc))?;
             // A period that crosses from one piece into the next uses one jerk: give both
-            // the lower of their jerk limits.
+            // the lower of their jerk limits — unless the path state already moves on the
+            // piece before, whose limits must not change under it (the generator may be
+            // half-way through a ramp planned with them). That drop is met by the scan
+            // (`Planner::scan`) instead.
             let mut jerk = l.jerk;
-            if let Some(prev) = self.pieces.back_mut() {
+            if let Some(prev) = self.pieces.back_mut()
+                && prev.start > self.state.s
+            {
                 prev.jerk = prev.jerk.min(jerk);
                 jerk = jerk.min(prev.jerk);
             }
@@ -562,7 +567,12 @@ impl Planner {
                     if let Some(Marker::Stop { op, dwell, .. }) = self.markers.pop_front() {
                         if dwell > 0.0 {
                             let loc = op.as_ref().map_or(self.rest_loc, |o| o.loc);
-                            self.hold_until = Some((self.time() + dwell, loc));
+                            // Holds at the same point add up (two dwells, a dwell and
+                            // a machine function's wait).
+                            let from = self
+                                .hold_until
+                                .map_or(self.time(), |(end, _)| end.max(self.time()));
+                            self.hold_until = Some((from + dwell, loc));
                         }
                         if let Some(op) = op {
                             return Some(Step::Event(op));
@@ -732,6 +742,13 @@ impl Planner {
         w.jerk = f64::INFINITY;
         let (mut pre_accel, mut pre_jerk) = (f64::INFINITY, f64::INFINITY);
         let (mut low_speed, mut low_accel) = (f64::INFINITY, f64::INFINITY);
+        let mut jerk_before = f64::INFINITY;
+        // Path distance the next period can reach: a piece starting within it shares its
+        // jerk limit with the current one for that period.
+        let next_reach = s
+            + self.state.v * period
+            + self.state.a.abs() * period * period
+            + self.pieces.get(first).map_or(0.0, |p| p.jerk) * period.powi(3);
         for (k, p) in self.pieces.iter().skip(first).enumerate() {
             if p.start - s > range || p.start >= stop {
                 break;
@@ -739,22 +756,28 @@ impl Planner {
             if k == 0 {
                 w.accel = p.accel;
                 w.jerk = p.jerk;
-            }
-            if k == 0 {
                 pre_accel = p.accel;
                 pre_jerk = p.jerk;
                 range = range.max(reach_for(pre_accel, pre_jerk));
+            } else if p.start <= next_reach {
+                w.jerk = w.jerk.min(p.jerk);
             }
             let limit = p.speed_limit(self.factor);
-            if limit < low_speed || p.accel < low_accel {
+            // A jerk that drops at the start of a piece (one committed while the path state
+            // moved on the piece before it, see `commit_front`) is a limit too.
+            let jerk_drops = p.jerk < jerk_before;
+            jerk_before = p.jerk;
+            if limit < low_speed || p.accel < low_accel || (k > 0 && jerk_drops) {
                 low_speed = low_speed.min(limit);
                 low_accel = low_accel.min(p.accel);
+                // The ramp that meets this limit arrives in a state the piece's own jerk
+                // can continue from: it uses the lower of the two jerks.
                 w.limits.push(Limit {
                     at: p.start,
                     speed: limit,
                     accel_after: p.accel,
                     accel: pre_accel,
-                    jerk: pre_jerk,
+                    jerk: pre_jerk.min(p.jerk),
                 });
                 // Limits further on are checked from this one (see `speed::settle`).
                 pre_accel = p.accel;

@@ -78,6 +78,12 @@ impl Window {
     }
 }
 
+/// Share of a limit's acceleration and jerk that the braking ramps of the checks assume.
+/// The actions brake with the full limits, so a state judged safe always has an action
+/// whose result is judged safe again, with room for rounding and for limits that follow
+/// each other closer than one period travels (dense CAM code).
+const JUDGE: f64 = 0.98;
+
 /// Bisection steps for the constant-jerk action.
 const BISECTION_STEPS: usize = 20;
 
@@ -107,7 +113,9 @@ fn misses(x: &Motion, l: &Limit) -> (f64, f64) {
     };
     let slowing = slows_for(x, l);
     let too_fast = if slowing {
-        ratio(Ramp::new(x.v, x.a, l.speed, l.accel, l.jerk).distance())
+        // A stop is judged with the full limits: the path arrives there exactly.
+        let share = if l.speed > 0.0 { JUDGE } else { 1.0 };
+        ratio(Ramp::new(x.v, x.a, l.speed, l.accel * share, l.jerk * share).distance())
     } else {
         0.0
     };
@@ -130,7 +138,9 @@ pub fn settle(limits: &mut [Limit]) {
     for k in (0..limits.len().saturating_sub(1)).rev() {
         let (here, next) = (limits[k], limits[k + 1]);
         let room = (next.at - here.at).max(0.0);
-        let brake = |v: f64| Ramp::new(v, 0.0, next.speed, next.accel, next.jerk).distance();
+        let brake = |v: f64| {
+            Ramp::new(v, 0.0, next.speed, next.accel * JUDGE, next.jerk * JUDGE).distance()
+        };
         if here.speed <= next.speed || brake(here.speed) <= room {
             continue;
         }
