@@ -321,6 +321,22 @@ pub struct MFunctionConfig {
 /// modes ride through a few missed SYNC periods by extrapolating; beyond that they fault.
 pub const DEFAULT_LATENESS_PERIODS: f64 = 10.0;
 
+/// Opens `program` for a front end (`klar run`, `check`, `ops`, `plot`, the dashboard): on
+/// `machine` exactly as a run does ([`MachineConfig::open_program`]); with no machine (`None`:
+/// a check or plot of the program on its own, no machine file named) with nothing of a
+/// machine: PLANE and cycle 19 assume an A/C table, TOOL CALL takes length and radius from
+/// TOOL DEF and the call, and only klar's own M functions are known.
+pub fn open_on(
+    machine: Option<&MachineConfig>,
+    program: &Path,
+    start: Pose,
+) -> Result<Interpreter, Diagnostic> {
+    match machine {
+        Some(m) => m.open_program(program, start),
+        None => Interpreter::open(program, start),
+    }
+}
+
 impl MachineConfig {
     /// The setpoint lateness that counts as an underrun and stops the run, s.
     pub fn setpoint_lateness_limit(&self) -> f64 {
@@ -494,17 +510,41 @@ impl MachineConfig {
         Ok(table)
     }
 
-    /// Opens a program for this machine: the interpreter with the machine's tool table.
+    /// Opens a program for this machine: the interpreter told everything the machine file
+    /// says that concerns the program (rotary axes for PLANE and cycle 19 / G80, the table
+    /// geometry for PLANE … TURN, the machine builder's M functions, the tool table), whatever
+    /// the program's dialect. Every front end
+    /// opens programs through here or [`open_on`], so they cannot drift apart.
     pub fn open_program(&self, program: &Path, start: Pose) -> Result<Interpreter, Diagnostic> {
         // PLANE and cycle 19 compute angles for the machine's rotary axes.
-        let interp = Interpreter::open(program, start)?
+        let mut interp = Interpreter::open(program, start)?
             .with_rotary_axes(&self.letters())
             .with_machine_functions(&self.machine_functions());
+        // PLANE … TURN keeps the linear axes still: the tip's new place needs the pivots.
+        if self.kinematics == KinematicsConfig::TableTable {
+            // the tilt axis as in `kinematics`
+            let tilt = if self.letters().contains(&AxisLetter::B) {
+                AxisLetter::B
+            } else {
+                AxisLetter::A
+            };
+            let t = &self.table_table;
+            interp = interp.with_table_geometry(tilt, t.tilt_pivot, t.table_pivot);
+        }
         Ok(match self.tool_table() {
             Ok(Some(table)) => interp.with_tools(table),
             // A bad table file was refused when the machine file was loaded.
             _ => interp,
         })
+    }
+
+    /// The start pose of this machine in program coordinates: each axis at its `start`.
+    pub fn start_pose(&self) -> Pose {
+        let mut p = Pose::ZERO;
+        for a in &self.axes {
+            p[a.letter] = a.start;
+        }
+        p
     }
 
     /// The kinematics this machine names, over its axes in machine order.

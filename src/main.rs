@@ -73,7 +73,8 @@ enum Command {
         /// Output file, .svg or .png.
         #[arg(short, long)]
         output: PathBuf,
-        /// Machine description (TOML), for the start position.
+        /// Machine description (TOML): the program is drawn as it runs there (start
+        /// position, tool table, rotary axes, M functions); without it, on its own.
         #[arg(long)]
         machine: Option<PathBuf>,
     },
@@ -180,11 +181,7 @@ fn load_machine(machine: Option<&Path>) -> Result<MachineConfig, ExitCode> {
 }
 
 fn start_pose(config: &MachineConfig) -> Pose {
-    let mut p = Pose::ZERO;
-    for a in &config.axes {
-        p[a.letter] = a.start;
-    }
-    p
+    config.start_pose()
 }
 
 fn print_diagnostics(diags: &[Diagnostic]) {
@@ -200,10 +197,9 @@ fn cmd_check(program: &Path, machine: Option<&Path>, quiet: bool) -> ExitCode {
         return cmd_test_run(program, &config);
     }
     // the machine's own M functions are known M numbers
-    let report = match klar_interp::Interpreter::open(program, start_pose(&config)) {
-        Ok(it) => it
-            .with_machine_functions(&config.machine_functions())
-            .check_report(),
+    // no machine named: the program checked on its own
+    let report = match klar::config::open_on(None, program, start_pose(&config)) {
+        Ok(it) => it.check_report(),
         Err(d) => klar_interp::CheckReport {
             errors: vec![d],
             ..Default::default()
@@ -472,7 +468,10 @@ fn cmd_plot(program: &Path, output: &Path, machine: Option<&Path>, profile: bool
     } else {
         None
     };
-    match klar::plot::plot_program_with(program, start_pose(&config), output, profile.as_ref()) {
+    // drawn as it runs on the machine named; without one, on its own
+    let on = machine.is_some().then_some(&config);
+    match klar::plot::plot_program_with(program, on, start_pose(&config), output, profile.as_ref())
+    {
         Ok(()) => ExitCode::SUCCESS,
         Err(klar::plot::PlotError::Program(diags)) => {
             print_diagnostics(&diags);

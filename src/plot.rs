@@ -10,6 +10,7 @@
 
 pub mod profile;
 
+use crate::config::MachineConfig;
 use klar_interp::{AxisLetter, Diagnostic, Feed, Interpreter, Op, OpKind, Pose};
 use klar_motion::comp::Compensator;
 use plotters::coord::Shift;
@@ -48,10 +49,16 @@ pub struct Stroke {
     pub points: Vec<[f64; 3]>,
 }
 
-/// Flattens a program's motion (the programmed contour) into strokes.
-pub fn toolpath(program: &Path, start: Pose) -> Result<Vec<Stroke>, PlotError> {
+/// Flattens a program's motion (the programmed contour) into strokes. The program runs on
+/// `machine` as `klar run` would run it there (see [`crate::config::open_on`]); `None` draws
+/// it on its own, without a machine's tools, rotary axes or M functions.
+pub fn toolpath(
+    program: &Path,
+    machine: Option<&MachineConfig>,
+    start: Pose,
+) -> Result<Vec<Stroke>, PlotError> {
     let mut strokes = Strokes::default();
-    let mut interp = open(program, start)?;
+    let mut interp = open(program, machine, start)?;
     // A tilted working plane: the programmed contour turned into the workpiece system.
     interp.set_working_plane_ops(true);
     let mut tilt = klar_motion::tilt::TiltStage::new();
@@ -68,8 +75,12 @@ pub fn toolpath(program: &Path, start: Pose) -> Result<Vec<Stroke>, PlotError> {
 
 /// Flattens the tool-centre path: the program's ops through tool radius compensation (RL/RR,
 /// APPR/DEP). Where no compensation is programmed it equals [`toolpath`]. A contour that
-/// cannot be compensated is an error naming the blocks.
-pub fn tool_centre_path(program: &Path, start: Pose) -> Result<Vec<Stroke>, PlotError> {
+/// cannot be compensated is an error naming the blocks. `machine` as for [`toolpath`].
+pub fn tool_centre_path(
+    program: &Path,
+    machine: Option<&MachineConfig>,
+    start: Pose,
+) -> Result<Vec<Stroke>, PlotError> {
     let mut comp = Compensator::new(start);
     let mut strokes = Strokes::default();
     let comp_error = |e: klar_motion::comp::CompError, loc: klar_interp::SourceLoc| {
@@ -81,7 +92,7 @@ pub fn tool_centre_path(program: &Path, start: Pose) -> Result<Vec<Stroke>, Plot
             message: e.to_string(),
         }])
     };
-    let mut interp = open(program, start)?;
+    let mut interp = open(program, machine, start)?;
     // Compensation runs in a tilted working plane; the compensator turns its output.
     interp.set_working_plane_ops(true);
     for op in interp {
@@ -100,9 +111,13 @@ pub fn tool_centre_path(program: &Path, start: Pose) -> Result<Vec<Stroke>, Plot
     Ok(strokes.done())
 }
 
-fn open(program: &Path, start: Pose) -> Result<Interpreter, PlotError> {
+fn open(
+    program: &Path,
+    machine: Option<&MachineConfig>,
+    start: Pose,
+) -> Result<Interpreter, PlotError> {
     klar_interp::syntax_check(program).map_err(PlotError::Program)?;
-    Interpreter::open(program, start).map_err(|d| PlotError::Program(vec![d]))
+    crate::config::open_on(machine, program, start).map_err(|d| PlotError::Program(vec![d]))
 }
 
 /// Collects flattened motion ops into strokes, joining pieces of the same kind.
@@ -234,15 +249,18 @@ fn register_font() {
 }
 
 /// Draws `program` into `output` (.svg or .png), 1400 × 700 pixels: the contour and the
-/// tool-centre path in the working plane and in an isometric view.
+/// tool-centre path in the working plane and in an isometric view. The program is drawn on
+/// its own, on no machine (see [`plot_program_with`]).
 pub fn plot_program(program: &Path, start: Pose, output: &Path) -> Result<(), PlotError> {
-    plot_program_with(program, start, output, None)
+    plot_program_with(program, None, start, output, None)
 }
 
-/// As [`plot_program`]; with a `profile` the picture grows to 1400 × 1500 pixels with the
-/// path speed and the per-axis velocity, acceleration and jerk over time below the paths.
+/// As [`plot_program`], on `machine` as for [`toolpath`]; with a `profile` the picture grows
+/// to 1400 × 1500 pixels with the path speed and the per-axis velocity, acceleration and jerk
+/// over time below the paths.
 pub fn plot_program_with(
     program: &Path,
+    machine: Option<&MachineConfig>,
     start: Pose,
     output: &Path,
     profile: Option<&profile::Profile>,
@@ -253,8 +271,8 @@ pub fn plot_program_with(
     if !matches!(ext.as_deref(), Some("svg" | "png")) {
         return Err(PlotError::Format(output.display().to_string()));
     }
-    let contour = toolpath(program, start)?;
-    let centre = match tool_centre_path(program, start) {
+    let contour = toolpath(program, machine, start)?;
+    let centre = match tool_centre_path(program, machine, start) {
         Ok(c) => c,
         Err(e) => {
             tracing::warn!("no tool-centre path: {e}");

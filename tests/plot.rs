@@ -89,7 +89,7 @@ fn every_program_plots_to_png_and_svg() {
 #[test]
 fn flattened_helix_stays_on_the_cylinder() {
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("programs/helix_thread.h");
-    let strokes = toolpath(&p, start()).unwrap();
+    let strokes = toolpath(&p, None, start()).unwrap();
     // Helix points: radius 15 about the origin between Z-8.25 and Z+0.75 (from the program).
     let mut n = 0;
     for s in &strokes {
@@ -121,8 +121,8 @@ fn the_tool_centre_runs_one_radius_outside_the_rl_rectangle() {
     // clockwise, so the centre runs outside: top edge at Y+65, right edge at X+105, bottom
     // edge at Y-5, left edge at X-5.
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("programs/rectangle_rl.h");
-    let contour = toolpath(&p, start()).unwrap();
-    let centre = tool_centre_path(&p, start()).unwrap();
+    let contour = toolpath(&p, None, start()).unwrap();
+    let centre = tool_centre_path(&p, None, start()).unwrap();
     assert_ne!(contour, centre);
     let pts: Vec<[f64; 3]> = centre
         .iter()
@@ -223,10 +223,10 @@ fn the_profile_of_one_line_shows_its_feed_limits_and_length() {
     assert!(p.machine_time > 0.5);
 
     let png = dir.join("one.png");
-    plot_program_with(&prog, start(), &png, Some(&p)).unwrap();
+    plot_program_with(&prog, None, start(), &png, Some(&p)).unwrap();
     assert_eq!(png_size(&std::fs::read(&png).unwrap()), (1400, 1500));
     let svg = dir.join("one.svg");
-    plot_program_with(&prog, start(), &svg, Some(&p)).unwrap();
+    plot_program_with(&prog, None, start(), &svg, Some(&p)).unwrap();
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.contains("path speed") && text.contains("jerk"));
 }

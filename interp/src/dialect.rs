@@ -22,8 +22,18 @@ pub(crate) trait DialectRun: Iterator<Item = Result<Op, Diagnostic>> + Send {
     fn last_position(&self) -> Pose;
     /// Switches block skip (`/` blocks) on or off.
     fn set_block_skip(&mut self, on: bool);
-    /// The machine's own M functions; a dialect without them ignores the list.
-    fn set_machine_functions(&mut self, _defs: &[crate::op::MachineFunctionDef]) {}
+    /// The Klartext machine that executes this dialect's blocks, if it has one (TNC ISO: its
+    /// blocks are run as the Klartext statements with the same meaning). Everything the
+    /// [`crate::Interpreter`] is told about the machine (tools, rotary axes, M functions,
+    /// datum and preset tables, working-plane ops, …) goes to this machine. Lathe DIN has its
+    /// own lathe model and takes none of these (see [`crate::Interpreter::with_tools`]).
+    fn klartext_machine(&mut self) -> Option<&mut crate::klartext::exec::Machine> {
+        None
+    }
+    /// Read access to [`DialectRun::klartext_machine`].
+    fn klartext_machine_ref(&self) -> Option<&crate::klartext::exec::Machine> {
+        None
+    }
 }
 
 /// A HEIDENHAIN program language.

@@ -226,7 +226,7 @@ impl Interpreter {
     /// A dry run (the test run): files are read but none is written (FN 16 output and FN 27
     /// table writes are kept in memory).
     pub fn set_dry_run(&mut self, on: bool) {
-        self.machine.set_dry_run(on);
+        self.target().set_dry_run(on);
     }
 
     /// Interprets a program held in memory (tests, benches); `name` is used in diagnostics and
@@ -272,10 +272,37 @@ impl Interpreter {
         }
     }
 
-    /// Uses `tools` for TOOL CALL: length and radius come from the table (plus the table's
-    /// and the call's DL/DR), and calling a tool missing from a non-empty table is an error.
+    /// The Klartext machine that executes the program: the TNC ISO runner's own (ISO blocks
+    /// run as the Klartext statements with the same meaning), else this interpreter's. Every
+    /// setter that tells the interpreter about the machine goes through here, so that it
+    /// reaches Klartext and TNC ISO programs alike.
+    fn target(&mut self) -> &mut Machine {
+        match self.other.as_mut().and_then(|o| o.klartext_machine()) {
+            Some(m) => m,
+            None => &mut self.machine,
+        }
+    }
+
+    /// Read access to the machine of [`Self::target`].
+    fn target_ref(&self) -> &Machine {
+        match self.other.as_ref().and_then(|o| o.klartext_machine_ref()) {
+            Some(m) => m,
+            None => &self.machine,
+        }
+    }
+
+    /// Uses `tools` for TOOL CALL (Klartext) and `T…` (TNC ISO): length and radius come from
+    /// the table (plus the table's and the call's DL/DR), and calling a tool missing from a
+    /// non-empty table is an error.
+    ///
+    /// Lathe DIN programs take none of the machine settings of the `with_*`/`set_*` methods
+    /// except block skip: their tools are named in the TURRET section and their ops are
+    /// tool-tip positions (a lathe tool is described by setting dimensions in X and Z and a
+    /// cutting-edge radius, not by the length and radius of a milling tool table); C is the
+    /// main spindle, not a table axis for PLANE; they have no M functions of the machine
+    /// builder, datum tables or tilted working plane of the mill.
     pub fn with_tools(mut self, tools: ToolTable) -> Self {
-        self.machine.set_tools(tools);
+        self.target().set_tools(tools);
         self
     }
 
@@ -283,7 +310,25 @@ impl Interpreter {
     /// B) and a table axis C, and compute their angles for them (an interpreter never told
     /// assumes an A/C table).
     pub fn with_rotary_axes(mut self, axes: &[crate::op::AxisLetter]) -> Self {
-        self.machine.set_rotary_axes(axes);
+        self.target().set_rotary_axes(axes);
+        self
+    }
+
+    /// Tells the interpreter the geometry of a table-table machine: the tilt axis (`A` or
+    /// `B`), a point on the tilt axis and a point on the table axis C (machine coordinates in
+    /// mm with every axis at zero). PLANE … TURN then positions only the rotary axes: the
+    /// machine's linear axes stand still and the tool tip ends on the point of the workpiece
+    /// that the table has carried under it. Without it (or with another letter) TURN holds
+    /// the tool tip on the workpiece like MOVE, since the tip's new place depends on the
+    /// pivots.
+    pub fn with_table_geometry(
+        mut self,
+        tilt: crate::op::AxisLetter,
+        tilt_pivot: [f64; 3],
+        table_pivot: [f64; 3],
+    ) -> Self {
+        self.target()
+            .set_table_geometry(tilt, tilt_pivot, table_pivot);
         self
     }
 
@@ -292,10 +337,7 @@ impl Interpreter {
     /// or end as defined, instead of being refused as not supported. Entries with a number
     /// klar defines itself ([`crate::op::BUILT_IN_M_NUMBERS`]) are ignored.
     pub fn with_machine_functions(mut self, defs: &[crate::op::MachineFunctionDef]) -> Self {
-        self.machine.set_machine_functions(defs);
-        if let Some(o) = &mut self.other {
-            o.set_machine_functions(defs);
-        }
+        self.target().set_machine_functions(defs);
         self
     }
 
@@ -304,26 +346,26 @@ impl Interpreter {
     /// so that radius compensation (RL/RR, APPR/DEP) can run in the tilted plane before the
     /// ops are turned into the workpiece system (klar-motion's compensation stage does both).
     /// Off (the default), ops leave in workpiece coordinates and RL/RR, APPR and DEP are
-    /// refused while a plane is tilted. Klartext programs only.
+    /// refused while a plane is tilted. Klartext and TNC ISO programs (G80, G41/G42, G26/G27).
     pub fn set_working_plane_ops(&mut self, on: bool) {
-        self.machine.set_working_plane_ops(on);
+        self.target().set_working_plane_ops(on);
     }
 
-    /// Uses `table` for datum shifts from a datum table (`CYCL DEF 7.1 #n`).
+    /// Uses `table` for datum shifts from a datum table (`CYCL DEF 7.1 #n`, ISO `G53 P01 n`).
     pub fn with_datum_table(mut self, table: DatumTable) -> Self {
-        self.machine.set_datum_table(table);
+        self.target().set_datum_table(table);
         self
     }
 
     /// Uses `table` for presets activated by cycle 247 (`Q339` = row number).
     pub fn with_preset_table(mut self, table: DatumTable) -> Self {
-        self.machine.set_preset_table(table);
+        self.target().set_preset_table(table);
         self
     }
 
     /// Sets the highest tool-axis position (mm), the target of `M140 MB MAX`.
     pub fn with_retract_limit(mut self, limit: f64) -> Self {
-        self.machine.retract_limit = Some(limit);
+        self.target().retract_limit = Some(limit);
         self
     }
 
@@ -343,9 +385,9 @@ impl Interpreter {
         }
     }
 
-    /// The blank recorded from BLK FORM, if any.
+    /// The blank recorded from BLK FORM (TNC ISO: G30/G31), if any.
     pub fn blank(&self) -> Option<Blank> {
-        self.machine.blank
+        self.target_ref().blank
     }
 
     /// Byte offset and line where the block read last starts (in the file running now).
@@ -950,9 +992,9 @@ impl Interpreter {
     /// Runs the whole program as a check (no file is written; every error is reported, a
     /// block with an error is skipped) with this interpreter's tools and machine settings.
     pub fn check_report(mut self) -> CheckReport {
-        self.machine.set_dry_run(true);
+        self.set_dry_run(true);
         // A check keeps no coordinates: compensation in a tilted plane is allowed as in a run.
-        self.machine.set_working_plane_ops(true);
+        self.set_working_plane_ops(true);
         let errors = self.run_all(Mode::Check);
         CheckReport {
             errors,

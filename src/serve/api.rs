@@ -325,11 +325,7 @@ struct ProgramView {
 }
 
 fn start_pose(machine: &MachineConfig) -> Pose {
-    let mut p = Pose::ZERO;
-    for a in &machine.axes {
-        p[a.letter] = a.start;
-    }
-    p
+    machine.start_pose()
 }
 
 async fn program(
@@ -339,12 +335,14 @@ async fn program(
     let path = resolve(&app, &q.name).await?;
     let start = start_pose(&app.inner.machine);
     let name = q.name.clone();
+    let inner = Arc::clone(&app.inner);
     let view = tokio::task::spawn_blocking(move || {
         let bytes = std::fs::read(&path).map_err(|e| ApiError::Read(e.to_string()))?;
         let text = String::from_utf8(bytes)
             // Older controls write latin-1: every byte is its own code point.
             .unwrap_or_else(|e| e.into_bytes().iter().map(|&b| b as char).collect());
-        let (path, errors) = match crate::plot::toolpath(&path, start) {
+        // the path as the program runs on the served machine
+        let (path, errors) = match crate::plot::toolpath(&path, Some(&inner.machine), start) {
             Ok(strokes) => (
                 strokes
                     .into_iter()

@@ -425,7 +425,11 @@ impl DialectRun for IsoProgram {
         self.block_skip = on;
     }
 
-    fn set_machine_functions(&mut self, defs: &[crate::op::MachineFunctionDef]) {
-        self.state.machine.set_machine_functions(defs);
+    fn klartext_machine(&mut self) -> Option<&mut Machine> {
+        Some(&mut self.state.machine)
+    }
+
+    fn klartext_machine_ref(&self) -> Option<&Machine> {
+        Some(&self.state.machine)
     }
 }

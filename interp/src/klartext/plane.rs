@@ -8,9 +8,15 @@
 //! - MOVE: the rotary axes turn to the angles at the block's F (or FMAX) while the tool tip
 //!   keeps its place on the workpiece; with DIST the point DIST above the tip along the tool
 //!   axis stays put instead (the tip swings about it).
-//! - TURN: the rotary axes turn as with MOVE. (A TNC leaves the linear axes where they are
-//!   here; klar holds the tip, since the tip's new place on the workpiece would depend on the
-//!   machine's pivots, which the interpreter does not know. MB is accepted and ignored.)
+//! - TURN: only the rotary axes turn; the machine's linear axes stay where they are, so the
+//!   tool tip ends on whatever point of the workpiece the table carries under it, and the
+//!   program positions the linear axes afterwards. Where that point is depends on the
+//!   machine's pivots: told them (`Interpreter::with_table_geometry`), the interpreter passes
+//!   the turn on as pieces of the tip's path on the workpiece that keep the linear axes
+//!   within a fraction of a micrometre of their place, between exact stops, and carries on
+//!   from the tip's new point (see [`super::plane_turn`]). Not told them (no table-table
+//!   machine, or a check without one), TURN holds the tool tip like MOVE. MB is accepted and
+//!   ignored.
 //! - STAY: nothing moves; the program positions the axes itself (`L A+Q120 C+Q122`).
 //!
 //! From the block on, the coordinates of the program are in the tilted system: every point
@@ -85,6 +91,15 @@ pub(crate) enum Positioning {
     Turn,
     /// STAY.
     Stay,
+}
+
+/// How a PLANE block's rotary move treats the tool.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Swing {
+    /// MOVE: the tip stays (or, with DIST, the point that far up the tool axis).
+    Move(Option<f64>),
+    /// TURN: only the rotary axes move.
+    Turn,
 }
 
 /// Words with a value, by slot.
@@ -347,6 +362,9 @@ pub(crate) struct PlaneState {
     /// Working-plane ops on: ops stay in the tilted system, [`OpKind::WorkingPlane`] marks
     /// each change (see [`super::plane_output`]).
     pub deferred: bool,
+    /// The table-table geometry (set by the interpreter's owner); `None`: TURN holds the tool
+    /// tip like MOVE.
+    pub geometry: Option<super::plane_turn::TableGeometry>,
 }
 
 impl Default for PlaneState {
@@ -361,6 +379,7 @@ impl Default for PlaneState {
             pre: 0,
             pending: VecDeque::new(),
             deferred: false,
+            geometry: None,
         }
     }
 }
@@ -526,7 +545,12 @@ impl Machine {
         self.plane_change_allowed(&r)?;
         let moves = w.positioning != Some(Positioning::Stay) && tilt.is_some();
         let dist = w.vals[DIST].map(|_| val(self, DIST) * self.unit);
-        self.apply_plane(r, tilt, angles, moves.then_some((feed, dist)), out, loc);
+        let how = if w.positioning == Some(Positioning::Turn) {
+            Swing::Turn
+        } else {
+            Swing::Move(dist)
+        };
+        self.apply_plane(r, tilt, angles, moves.then_some((feed, how)), out, loc);
         Ok(Flow::Continue)
     }
 
@@ -540,13 +564,14 @@ impl Machine {
     }
 
     /// Makes `r` the working plane with the rotary axes at `angles`: writes Q120–Q122, turns
-    /// the axes when `motion` is given (feed, DIST), and re-expresses the position.
+    /// the axes when `motion` is given (feed, MOVE with its DIST or TURN), and re-expresses
+    /// the position.
     pub(super) fn apply_plane(
         &mut self,
         r: M3,
         tilt: Option<Tilt>,
         angles: (f64, f64),
-        motion: Option<(Feed, Option<f64>)>,
+        motion: Option<(Feed, Swing)>,
         out: &mut VecDeque<Op>,
         loc: SourceLoc,
     ) {
@@ -574,10 +599,23 @@ impl Machine {
             self.tilt.plane_tcpm = true;
             self.sync_tcpm(&mut emit);
         }
-        if let (Some((feed, dist)), Some(t)) = (motion, tilt) {
+        if let (Some((feed, how)), Some(t)) = (motion, tilt) {
             end_w[tilt_letter] = angles.0;
             end_w[AxisLetter::C] = angles.1;
-            self.rotary_move(t, tilt_letter, here_w, &mut end_w, feed, dist, &mut emit);
+            let geometry = self.tilt.geometry.filter(|g| g.tilt == t);
+            match (how, geometry) {
+                // The tool tip follows the table only while the tip transformation is on;
+                // without it the linear axes stand still whatever the interpreter does.
+                (Swing::Turn, Some(g)) if self.tilt.kin_on => {
+                    self.turn_move(&g, tilt_letter, here_w, &mut end_w, feed, &mut emit);
+                }
+                (Swing::Turn, _) => {
+                    self.rotary_move(t, tilt_letter, here_w, &mut end_w, feed, None, &mut emit);
+                }
+                (Swing::Move(dist), _) => {
+                    self.rotary_move(t, tilt_letter, here_w, &mut end_w, feed, dist, &mut emit);
+                }
+            }
         }
         let at_zero = end_w[tilt_letter] == 0.0 && end_w[AxisLetter::C] == 0.0;
         if reset && (motion.is_some() || at_zero) {
