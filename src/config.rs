@@ -12,8 +12,9 @@ use klar_interp::op::{
     BUILT_IN_M_NUMBERS, MAX_MACHINE_FUNCTION, MachineFunctionDef, MachineFunctionTime,
 };
 use klar_interp::{AxisLetter, Diagnostic, Interpreter, Pose, Tool, ToolTable};
-use klar_motion::AxisLimits;
 use klar_motion::kinematics::{Cartesian, Kinematics, Lathe, TableTable, TiltAxis};
+use klar_motion::planner::TableGeometry;
+use klar_motion::{AxisLimits, MotionError, Planner, PlannerConfig};
 use klar_sim::plant::SimAxisParams;
 use serde::Deserialize;
 use std::collections::BTreeMap;
@@ -545,6 +546,25 @@ impl MachineConfig {
             p[a.letter] = a.start;
         }
         p
+    }
+
+    /// A planner for this machine standing at `start`: its axis limits, servo period and
+    /// tolerance, and on a table-table machine the table geometry that bounds turning moves
+    /// with TCPM.
+    pub fn planner(&self, start: Pose) -> Result<Planner, MotionError> {
+        let mut planner = Planner::new(
+            PlannerConfig {
+                limits: self.axis_limits(),
+                period: self.servo_period,
+                tolerance: self.tolerance,
+            },
+            start,
+        )?;
+        if self.kinematics == KinematicsConfig::TableTable {
+            let t = &self.table_table;
+            planner.set_table_geometry(TableGeometry::new(t.tilt_pivot, t.table_pivot));
+        }
+        Ok(planner)
     }
 
     /// The kinematics this machine names, over its axes in machine order.

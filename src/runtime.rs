@@ -33,9 +33,7 @@ use crate::trace::TraceWriter;
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
 use klar_interp::{AxisLetter, Diagnostic, Op, OpKind, SourceLoc};
 use klar_motion::kinematics::Kinematics;
-use klar_motion::{
-    AxisFault, BackendError, MotionError, Planner, PlannerConfig, Sample, Setpoint, Step,
-};
+use klar_motion::{AxisFault, BackendError, MotionError, Planner, Sample, Setpoint, Step};
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
@@ -648,13 +646,9 @@ impl<'a, 'w> Run<'a, 'w> {
             .map_err(|d| fail(RunError::Program(d), &report))?;
         let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
         let ops = OpStream::new(interp, start, max_rpm, path);
-        let planner_config = PlannerConfig {
-            limits: config.axis_limits(),
-            period: config.servo_period,
-            tolerance: config.tolerance,
-        };
-        let planner =
-            Planner::new(planner_config, start).map_err(|e| fail(RunError::Motion(e), &report))?;
+        let planner = config
+            .planner(start)
+            .map_err(|e| fail(RunError::Motion(e), &report))?;
         let trace = match options.trace {
             Some(w) => Some(TraceWriter::new(w, &letters).map_err(|e| fail(e.into(), &report))?),
             None => None,

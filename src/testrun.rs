@@ -17,7 +17,7 @@ use crate::runtime::RunError;
 use crate::runtime::stream::OpStream;
 use klar_interp::op::{SpindleDir, SpindleSpeed};
 use klar_interp::{AxisLetter, Diagnostic, Feed, Op, OpKind, Pose, SourceLoc};
-use klar_motion::{Planner, PlannerConfig, Step};
+use klar_motion::{Planner, Step};
 use std::path::Path;
 
 /// Slack on soft-limit comparisons, mm or degrees.
@@ -175,15 +175,7 @@ struct MachineChecks<'a> {
 
 impl<'a> MachineChecks<'a> {
     fn new(path: &'a Path, config: &'a MachineConfig, start: Pose) -> Self {
-        let planner = Planner::new(
-            PlannerConfig {
-                limits: config.axis_limits(),
-                period: config.servo_period,
-                tolerance: config.tolerance,
-            },
-            start,
-        )
-        .ok();
+        let planner = config.planner(start).ok();
         Self {
             path,
             config,

@@ -23,9 +23,14 @@
 //! √((W·A)² + (c₂·V²)²) + o·A ≤ a_max      √((W·J + c₃·V³)² + (3·c₂·V·A)²) + o·J ≤ j_max
 //! ```
 //!
+//! More generally, on any move whose path distance is its length over the linear axes, the
+//! unit tangent q′ and the curvature vector q″ (length κ) are orthogonal, so each linear
+//! axis's acceleration `q′·A + q″·V²` is at most `√(A² + (κ·V²)²)` (Cauchy–Schwarz with
+//! `q′ᵢ² + (q″ᵢ/κ)² ≤ 1`). Blends and splines use whichever of the two forms allows more.
+//!
 //! The budget is split so the speed keeps a share of each limit for speeding up and slowing
-//! down: the curvature term gets at most half of the acceleration limit (0.8 of it on arcs,
-//! which leaves 0.6 in quadrature), c₃·V³ at most a quarter of the jerk limit, 3·c₂·V·A at
+//! down: the curvature term gets at most half of the acceleration limit (0.8 of it where the
+//! quadrature applies, which leaves 0.6), c₃·V³ at most a quarter of the jerk limit, 3·c₂·V·A at
 //! most a quarter (0.6 in quadrature on arcs); A and J then take what is left. On a line
 //! (c₂ = c₃ = 0) this is exactly the axis limits projected on the direction.
 
@@ -42,8 +47,17 @@ const ARC_CURVE_SHARE: f64 = 0.8;
 /// left in quadrature for the path jerk and c₃·V³).
 const ARC_JERK_SHARE: f64 = 0.6;
 
-/// A moving axis: its limits, c₁, c₂, c₃ and the turning part W of c₁.
-type Moving = (AxisLimits, f64, f64, f64, f64);
+/// A moving axis: its limits, the bounds c₁, c₂, c₃, the turning part W of c₁ (arcs) and
+/// the curvature bound κ that applies to it (linear axes of a linear move, else 0).
+#[derive(Debug, Clone, Copy)]
+struct Moving {
+    l: AxisLimits,
+    c1: f64,
+    c2: f64,
+    c3: f64,
+    wave: f64,
+    kappa: f64,
+}
 
 /// Why no path limits exist for a segment.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -68,47 +82,86 @@ pub fn path_limits(
             continue;
         }
         match limits[i] {
-            Some(l) => moving[i] = Some((l, c1, c2, c3, bounds.wave[i].min(c1))),
+            Some(l) => {
+                moving[i] = Some(Moving {
+                    l,
+                    c1,
+                    c2,
+                    c3,
+                    wave: bounds.wave[i].min(c1),
+                    kappa: if axis.is_rotary() {
+                        0.0
+                    } else {
+                        bounds.curvature
+                    },
+                })
+            }
             None => return Err(LimitError::AbsentAxis(axis)),
         }
     }
     let axes = || moving.iter().flatten();
 
     let mut v = feed.unwrap_or(f64::INFINITY);
-    for &(l, c1, c2, c3, w) in axes() {
-        if c1 > 0.0 {
-            v = v.min(l.max_velocity / c1);
+    for m in axes() {
+        let l = m.l;
+        if m.c1 > 0.0 {
+            v = v.min(l.max_velocity / m.c1);
         }
-        if c2 > 0.0 {
-            let share = if w > 0.0 { ARC_CURVE_SHARE } else { 0.5 };
-            v = v.min((share * l.max_acceleration / c2).sqrt());
+        if m.c2 > 0.0 {
+            let mut top = if m.wave > 0.0 {
+                (ARC_CURVE_SHARE * l.max_acceleration / m.c2).sqrt()
+            } else {
+                (0.5 * l.max_acceleration / m.c2).sqrt()
+            };
+            if m.kappa > 0.0 {
+                top = top.max((ARC_CURVE_SHARE * l.max_acceleration / m.kappa).sqrt());
+            }
+            v = v.min(top);
         }
-        if c3 > 0.0 {
-            v = v.min((0.25 * l.max_jerk / c3).cbrt());
+        if m.c3 > 0.0 {
+            v = v.min((0.25 * l.max_jerk / m.c3).cbrt());
         }
     }
     let mut a = f64::INFINITY;
-    for &(l, c1, c2, _, w) in axes() {
+    for m in axes() {
+        let (l, c1, c2, w) = (m.l, m.c1, m.c2, m.wave);
         let curve = c2 * v * v;
-        if w > 0.0 {
+        // Any curve in arc length: √(A² + (κ·V²)²) ≤ a_max on a linear axis.
+        let quad = if m.kappa > 0.0 {
+            let k = m.kappa * v * v;
+            (l.max_acceleration * l.max_acceleration - k * k)
+                .max(0.0)
+                .sqrt()
+        } else {
+            0.0
+        };
+        let mut ai = if w > 0.0 {
             // √((W·A)² + X²) + o·A ≤ a_max holds for A = √(ã² − X²)/c₁ with
             // ã = a_max·(1 − o/c₁): o·A ≤ o·a_max/c₁ and W ≤ c₁.
             let am = l.max_acceleration * (1.0 - (c1 - w) / c1);
-            a = a.min((am * am - curve * curve).max(0.0).sqrt() / c1);
-            if v > 0.0 {
-                a = a.min(ARC_JERK_SHARE * l.max_jerk / (3.0 * c2 * v));
-            }
+            ((am * am - curve * curve).max(0.0).sqrt() / c1).max(quad)
+        } else if c1 > 0.0 {
+            ((l.max_acceleration - curve) / c1).max(quad)
         } else {
-            if c1 > 0.0 {
-                a = a.min((l.max_acceleration - curve) / c1);
-            }
-            if c2 > 0.0 && v > 0.0 {
-                a = a.min(l.max_jerk / (12.0 * c2 * v));
-            }
+            quad.max(if curve <= l.max_acceleration {
+                f64::INFINITY
+            } else {
+                0.0
+            })
+        };
+        if c2 > 0.0 && v > 0.0 {
+            let share = if w > 0.0 {
+                ARC_JERK_SHARE / 3.0
+            } else {
+                1.0 / 12.0
+            };
+            ai = ai.min(share * l.max_jerk / (c2 * v));
         }
+        a = a.min(ai);
     }
     let mut j = f64::INFINITY;
-    for &(l, c1, c2, c3, w) in axes() {
+    for m in axes() {
+        let (l, c1, c2, c3, w) = (m.l, m.c1, m.c2, m.c3, m.wave);
         if c1 <= 0.0 {
             continue;
         }

@@ -244,6 +244,8 @@ impl Quintic {
                 *x = x.min(1.0);
             }
         }
+        // Blends join linear moves only: their path distance is the linear arc length.
+        b.curvature = Metric::Linear.norm(&b.d2);
         Some(b)
     }
 }

@@ -155,6 +155,7 @@ impl Arc {
         };
         let w = (self.theta / self.length).abs();
         let r = self.radius;
+        b.curvature = r * w * w;
         for (i, fix) in [(self.p, self.end_fix[0]), (self.q, self.end_fix[1])] {
             b.wave[i] = r * w;
             b.d1[i] = r * w + (fix / self.length).abs();

@@ -89,6 +89,11 @@ pub struct AxisBounds {
     /// terms of an axis's acceleration and jerk peak at different angles and add in
     /// quadrature (see [`crate::limits`]).
     pub wave: [f64; 9],
+    /// Bound of the curvature |d²q/ds²| over the linear axes X Y Z U V W, for a segment
+    /// whose path distance is its length over those axes (0 otherwise, e.g. rotary-only
+    /// moves). The unit tangent and the curvature direction are orthogonal, so on every
+    /// linear axis `|q′·A + q″·V²| ≤ √(A² + (κ·V²)²)` (see [`crate::limits`]).
+    pub curvature: f64,
 }
 
 /// Geometry an op describes that cannot be followed.

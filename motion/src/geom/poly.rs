@@ -222,6 +222,9 @@ impl Poly {
                 b.d3[i] = b.d3[i].max(q3.abs() * BOUND_MARGIN);
             }
         }
+        if self.metric == Metric::Linear {
+            b.curvature = Metric::Linear.norm(&b.d2);
+        }
         Ok(b)
     }
 }

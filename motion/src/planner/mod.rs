@@ -22,8 +22,11 @@
 
 pub mod path;
 pub mod speed;
+pub mod tcpm;
 
-use crate::config::PlannerConfig;
+pub use tcpm::{TCPM_DERATE, TableGeometry};
+
+use crate::config::{AxisLimits, PlannerConfig};
 use crate::error::MotionError;
 use crate::geom::{Arc, GeomError, Line, Poly, Segment, finite_pose, letter};
 use crate::profile::Ramp;
@@ -127,34 +130,10 @@ pub struct Planner {
     held: bool,
     cycles: u64,
     finished: bool,
-}
-
-/// Share of each linear axis's velocity, acceleration and jerk the program axes get while
-/// TCPM (and with it a tilted working plane) is on.
-///
-/// The planner limits the program (workpiece) axes; with the table turned, each machine
-/// linear axis moves as a row of a rotation matrix applied to them: `m_i = Σ_j R_ij p_j`. With
-/// `|p_j| ≤ L` that is at most `L · Σ_j |R_ij| ≤ L · √3` (a unit row), so `L = limit / √3` keeps
-/// every machine axis within its own limit whatever the rotation — for rates of the path at
-/// fixed rotary angles; the extra linear motion of a tool tip held while the table turns is
-/// not covered by this bound.
-pub const TCPM_DERATE: f64 = 0.577_350_269_189_625_8;
-
-/// The limits for the program axes while TCPM is on: linear axes derated by [`TCPM_DERATE`].
-fn tcpm_limits(
-    base: &[Option<crate::config::AxisLimits>; 9],
-) -> [Option<crate::config::AxisLimits>; 9] {
-    let mut out = *base;
-    for (i, l) in out.iter_mut().enumerate() {
-        if let Some(l) = l
-            && !letter(i).is_rotary()
-        {
-            l.max_velocity *= TCPM_DERATE;
-            l.max_acceleration *= TCPM_DERATE;
-            l.max_jerk *= TCPM_DERATE;
-        }
-    }
-    out
+    /// True while TCPM is on.
+    tcpm: bool,
+    /// The table axes of a table-table machine, for the limits of turning moves with TCPM.
+    table: Option<TableGeometry>,
 }
 
 impl Planner {
@@ -204,7 +183,39 @@ impl Planner {
             held: false,
             cycles: 0,
             finished: false,
+            tcpm: false,
+            table: None,
         })
+    }
+
+    /// Tells the planner where the table axes of a table-table machine are: moves that turn
+    /// a rotary axis while TCPM is on then get limits that keep the machine's linear axes
+    /// within theirs ([`tcpm`]). Without it such moves get the fixed-angle limits only.
+    pub fn set_table_geometry(&mut self, table: TableGeometry) {
+        self.table = Some(table);
+    }
+
+    /// The per-axis limits for a piece of `shape` from `offset` over `length`.
+    fn limits_for(&self, shape: &Shape, offset: f64, length: f64) -> [Option<AxisLimits>; 9] {
+        let Some(table) = self.table.filter(|_| self.tcpm) else {
+            return self.config.limits;
+        };
+        let (bounds, straight) = match shape {
+            Shape::Element(g) => (g.bounds(), matches!(g, Segment::Line(_))),
+            Shape::Blend(q) => (q.bounds(), false),
+        };
+        let turns = (0..9).any(|i| letter(i).is_rotary() && bounds.d1[i] * length > 1e-9);
+        if !turns {
+            return self.config.limits;
+        }
+        let tip = |s: f64| {
+            let p = shape.point(s).pose;
+            [p.0[0], p.0[1], p.0[2]]
+        };
+        // A point of a curve lies within half its length of one of its ends.
+        let spread = if straight { 0.0 } else { 0.5 * length };
+        let d = table.reach(&[tip(offset), tip(offset + length)], spread);
+        tcpm::turning_limits(&self.base_limits, d)
     }
 
     /// The configuration in use.
@@ -372,8 +383,9 @@ impl Planner {
             }
             OpKind::Tcpm { on } => {
                 // The switch follows an exact stop: the moves after it get the new limits.
+                self.tcpm = *on;
                 self.config.limits = if *on {
-                    tcpm_limits(&self.base_limits)
+                    tcpm::fixed_limits(&self.base_limits)
                 } else {
                     self.base_limits
                 };
@@ -420,8 +432,8 @@ impl Planner {
         }
         // Refuse absent axes and unusable limits now, at the op that causes them.
         let whole = Shape::Element(segment.clone());
-        piece_limits(&whole, segment.length(), feed, &self.config.limits)
-            .map_err(|e| piece_error(e, loc))?;
+        let limits = self.limits_for(&whole, 0.0, segment.length());
+        piece_limits(&whole, segment.length(), feed, &limits).map_err(|e| piece_error(e, loc))?;
         self.planned_pose = segment.end();
         self.waiting.push_back(Waiting {
             element: Element {
@@ -478,8 +490,8 @@ impl Planner {
         let mut events_at = self.committed_end;
         for (shape, offset, length, feed, loc) in done.pieces {
             let is_element = matches!(shape, Shape::Element(_));
-            let l = piece_limits(&shape, length, feed, &self.config.limits)
-                .map_err(|e| piece_error(e, loc))?;
+            let limits = self.limits_for(&shape, offset, length);
+            let l = piece_limits(&shape, length, feed, &limits).map_err(|e| piece_error(e, loc))?;
             // A period that crosses from one piece into the next uses one jerk: give both
             // the lower of their jerk limits — unless the path state already moves on the
             // piece before, whose limits must not change under it (the generator may be

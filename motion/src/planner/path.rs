@@ -58,7 +58,7 @@ pub enum Shape {
 }
 
 impl Shape {
-    fn point(&self, s: f64) -> PathPoint {
+    pub(crate) fn point(&self, s: f64) -> PathPoint {
         match self {
             Shape::Element(g) => g.point(s),
             Shape::Blend(q) => q.point(s),
