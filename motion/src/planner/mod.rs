@@ -344,16 +344,7 @@ impl Planner {
             }
             OpKind::Dwell { seconds } => {
                 let seconds = *seconds;
-                if !(seconds.is_finite() && seconds >= 0.0) {
-                    return Err(MotionError::BadDwell { loc, seconds });
-                }
-                self.flush()?;
-                self.markers.push_back(Marker::Stop {
-                    at: self.committed_end,
-                    op: Some(op),
-                    dwell: seconds,
-                });
-                return Ok(());
+                return self.stop_and_hold(op, seconds);
             }
             OpKind::Tolerance { mm } => {
                 let mm = match mm {
@@ -398,16 +389,7 @@ impl Planner {
                 // A machine function that needs the machine standing: exact stop on its
                 // point, the function, then the machine holds for `wait` seconds.
                 let wait = *wait;
-                if !(wait.is_finite() && wait >= 0.0) {
-                    return Err(MotionError::BadDwell { loc, seconds: wait });
-                }
-                self.flush()?;
-                self.markers.push_back(Marker::Stop {
-                    at: self.committed_end,
-                    op: Some(op),
-                    dwell: wait,
-                });
-                return Ok(());
+                return self.stop_and_hold(op, wait);
             }
             // A machine function without stop is an event on the path like coolant; it has
             // no standstill to wait in, so its `wait` is not applied.
@@ -449,6 +431,24 @@ impl Planner {
         while self.waiting.len() >= ELEMENTS_AHEAD {
             self.commit_front(false)?;
         }
+        Ok(())
+    }
+
+    /// An op that needs the machine standing on its point: exact stop, the op, then a hold
+    /// of `seconds` (finite and ≥ 0).
+    fn stop_and_hold(&mut self, op: Op, seconds: f64) -> Result<(), MotionError> {
+        if !(seconds.is_finite() && seconds >= 0.0) {
+            return Err(MotionError::BadDwell {
+                loc: op.loc,
+                seconds,
+            });
+        }
+        self.flush()?;
+        self.markers.push_back(Marker::Stop {
+            at: self.committed_end,
+            op: Some(op),
+            dwell: seconds,
+        });
         Ok(())
     }
 
