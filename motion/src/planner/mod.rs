@@ -3,7 +3,8 @@
 //! Motion ops become path elements ([`crate::geom::Segment`]); corners between elements
 //! are blended inside the active path tolerance ([`path`]); a jerk-limited speed generator
 //! moves along the blended path one servo period at a time ([`speed`]), looking ahead over
-//! the pieces within its braking distance. There is no per-element profile: speed carries
+//! the pieces within its braking distance (the window, in `scan.rs`). While TCPM is on,
+//! [`tcpm`] gives the program axes limits that keep the machine axes within theirs. There is no per-element profile: speed carries
 //! across elements, so short elements cost no time of their own.
 //!
 //! Ops without motion reach the caller as [`Step::Event`]s, in order, before the first
@@ -21,6 +22,7 @@
 //! the path.
 
 pub mod path;
+mod scan;
 pub mod speed;
 pub mod tcpm;
 
@@ -32,7 +34,7 @@ use crate::geom::{Arc, GeomError, Line, Poly, Segment, finite_pose, letter};
 use crate::profile::Ramp;
 use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
 use path::{Committed, Element, MAX_OVERRIDE, Piece, PieceError, Shape, commit, piece_limits};
-use speed::{Limit, Motion, Window};
+use speed::{Motion, Window};
 use std::collections::VecDeque;
 
 /// Pieces and events the planner holds at most before it stops asking for input (memory
@@ -705,121 +707,6 @@ impl Planner {
                 loc: self.rest_loc,
             },
         }
-    }
-
-    /// Index of the piece the path state moves on: the first that ends beyond it (a state
-    /// exactly at a piece's end moves on the next one).
-    fn current_index(&self) -> usize {
-        let s = self.state.s;
-        self.pieces
-            .iter()
-            .position(|p| p.end() > s)
-            .unwrap_or(self.pieces.len().saturating_sub(1))
-    }
-
-    /// The next point where the path must stand still.
-    fn next_stop(&self) -> f64 {
-        self.markers
-            .iter()
-            .find_map(|m| match m {
-                Marker::Stop { at, .. } => Some(*at),
-                Marker::Event { .. } => None,
-            })
-            .unwrap_or(self.committed_end)
-            .min(self.committed_end)
-    }
-
-    /// Collects the speed limits ahead that can matter within the braking distance.
-    fn scan(&mut self) {
-        let s = self.state.s;
-        let stop = self.next_stop();
-        let first = self.current_index();
-        let current = match self.pieces.get(first) {
-            Some(p) => p.speed_limit(self.factor),
-            None => 0.0,
-        };
-        let vh = self.state.v.max(current);
-        let (v0, a0, period) = (vh, self.state.a.max(0.0), self.config.period);
-        // Braking distance with the lowest limits seen so far, doubled.
-        let reach_for = |accel: f64, jerk: f64| {
-            2.0 * Ramp::new(v0, a0, 0.0, accel, jerk).distance() + 2.0 * v0 * period + 1e-9
-        };
-        let mut range = reach_for(self.accel_floor, self.jerk_floor);
-        let w = &mut self.window;
-        w.limits.clear();
-        // Acceleration and jerk for the next period: those of the current piece (the
-        // limits ahead make the state arrive at each piece within its acceleration limit;
-        // neighbouring pieces share the lower jerk limit, see `commit_front`).
-        w.accel = f64::INFINITY;
-        w.jerk = f64::INFINITY;
-        let (mut pre_accel, mut pre_jerk) = (f64::INFINITY, f64::INFINITY);
-        let (mut low_speed, mut low_accel) = (f64::INFINITY, f64::INFINITY);
-        let mut jerk_before = f64::INFINITY;
-        // Path distance the next period can reach: a piece starting within it shares its
-        // jerk limit with the current one for that period.
-        let next_reach = s
-            + self.state.v * period
-            + self.state.a.abs() * period * period
-            + self.pieces.get(first).map_or(0.0, |p| p.jerk) * period.powi(3);
-        for (k, p) in self.pieces.iter().skip(first).enumerate() {
-            if p.start - s > range || p.start >= stop {
-                break;
-            }
-            if k == 0 {
-                w.accel = p.accel;
-                w.jerk = p.jerk;
-                pre_accel = p.accel;
-                pre_jerk = p.jerk;
-                range = range.max(reach_for(pre_accel, pre_jerk));
-            } else if p.start <= next_reach {
-                w.jerk = w.jerk.min(p.jerk);
-            }
-            let limit = p.speed_limit(self.factor);
-            // A jerk that drops at the start of a piece (one committed while the path state
-            // moved on the piece before it, see `commit_front`) is a limit too.
-            let jerk_drops = p.jerk < jerk_before;
-            jerk_before = p.jerk;
-            if limit < low_speed || p.accel < low_accel || (k > 0 && jerk_drops) {
-                low_speed = low_speed.min(limit);
-                low_accel = low_accel.min(p.accel);
-                // The ramp that meets this limit arrives in a state the piece's own jerk
-                // can continue from: it uses the lower of the two jerks.
-                w.limits.push(Limit {
-                    at: p.start,
-                    speed: limit,
-                    accel_after: p.accel,
-                    accel: pre_accel,
-                    jerk: pre_jerk.min(p.jerk),
-                });
-                // Limits further on are checked from this one (see `speed::settle`).
-                pre_accel = p.accel;
-                pre_jerk = p.jerk;
-            }
-            if p.accel < pre_accel || p.jerk < pre_jerk {
-                pre_accel = pre_accel.min(p.accel);
-                pre_jerk = pre_jerk.min(p.jerk);
-                range = range.max(reach_for(pre_accel, pre_jerk));
-            }
-        }
-        self.range = range;
-        if !w.accel.is_finite() {
-            w.accel = self.accel_floor;
-            w.jerk = self.jerk_floor;
-        }
-        if !pre_accel.is_finite() {
-            pre_accel = w.accel;
-            pre_jerk = w.jerk;
-        }
-        if stop - s <= range {
-            w.limits.push(Limit {
-                at: stop,
-                speed: 0.0,
-                accel_after: f64::INFINITY,
-                accel: pre_accel,
-                jerk: pre_jerk,
-            });
-        }
-        speed::settle(&mut w.limits);
     }
 
     /// Refuses an op that does not start at the previous end point.
