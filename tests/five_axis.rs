@@ -3,21 +3,10 @@
 
 mod common;
 
+use common::mill5::{rx, rz, tip_of};
 use common::{program, run};
 use klar::config::{KinematicsConfig, MachineConfig};
 use klar_interp::{AxisLetter, Pose};
-
-/// Rotation of `v` by `deg` degrees about X, written out (right-hand rule).
-fn rx(deg: f64, v: [f64; 3]) -> [f64; 3] {
-    let (s, c) = deg.to_radians().sin_cos();
-    [v[0], c * v[1] - s * v[2], s * v[1] + c * v[2]]
-}
-
-/// Rotation of `v` by `deg` degrees about Z, written out (right-hand rule).
-fn rz(deg: f64, v: [f64; 3]) -> [f64; 3] {
-    let (s, c) = deg.to_radians().sin_cos();
-    [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]
-}
 
 #[test]
 fn builtin_mill5_is_a_table_table_a_c_machine() {
@@ -73,13 +62,6 @@ fn table_table_needs_c_and_one_tilt_axis() {
     let text = klar::config::BUILTIN_MILL5.replace("letter = \"C\"", "letter = \"B\"");
     let err = MachineConfig::parse("bad", &text).unwrap_err().to_string();
     assert!(err.contains("needs a C axis and one of A or B"), "{err}");
-}
-
-/// The workpiece point under machine X Y Z `m` at A `a`, C `c` on the built-in 5-axis mill
-/// (tilt line at z = −100, table axis through the origin): undo the tilt, then the table.
-fn tip_of(m: [f64; 3], a: f64, c: f64) -> [f64; 3] {
-    let lifted = rx(a, [m[0], m[1], m[2] + 100.0]);
-    rz(c, [lifted[0], lifted[1], lifted[2] - 100.0])
 }
 
 /// Rows of the commanded trace as (X, Y, Z, A, C).

@@ -4,27 +4,9 @@
 
 mod common;
 
+use common::mill5::tip_of;
 use common::{run, temp_program};
 use klar::config::MachineConfig;
-
-/// Rotation of `v` by `deg` degrees about X, written out (right-hand rule).
-fn rx(deg: f64, v: [f64; 3]) -> [f64; 3] {
-    let (s, c) = deg.to_radians().sin_cos();
-    [v[0], c * v[1] - s * v[2], s * v[1] + c * v[2]]
-}
-
-/// Rotation of `v` by `deg` degrees about Z, written out (right-hand rule).
-fn rz(deg: f64, v: [f64; 3]) -> [f64; 3] {
-    let (s, c) = deg.to_radians().sin_cos();
-    [c * v[0] - s * v[1], s * v[0] + c * v[1], v[2]]
-}
-
-/// The workpiece point under the tool tip at machine position `m` and table angles A, C on
-/// the built-in mill5 (tilt axis 100 mm below the table, table axis through the origin).
-fn tip_of(m: [f64; 3], a: f64, c: f64) -> [f64; 3] {
-    let lifted = rx(a, [m[0], m[1], m[2] + 100.0]);
-    rz(c, [lifted[0], lifted[1], lifted[2] - 100.0])
-}
 
 #[test]
 fn rapid_table_turns_far_from_the_table_axis_keep_every_axis_within_its_limits() {

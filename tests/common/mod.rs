@@ -3,6 +3,8 @@
 
 #![allow(dead_code)]
 
+pub mod mill5;
+
 use klar::config::MachineConfig;
 use klar::runtime::{RunFailure, RunOptions, RunReport, run_program};
 pub use klar::trace::Trace;
