@@ -144,17 +144,42 @@ pub fn settle(limits: &mut [Limit]) {
         if here.speed <= next.speed || brake(here.speed) <= room {
             continue;
         }
-        let (mut lo, mut hi) = (next.speed, here.speed);
-        for _ in 0..40 {
-            let mid = 0.5 * (lo + hi);
-            if brake(mid) <= room {
-                lo = mid;
-            } else {
-                hi = mid;
+        let fast = braking_speed(next.speed, room, next.accel * JUDGE, next.jerk * JUDGE);
+        let (mut lo, mut hi) = (next.speed, fast.min(here.speed));
+        if brake(hi) > room {
+            // Rounding put the closed form a hair too high: settle it by bisection.
+            for _ in 0..40 {
+                let mid = 0.5 * (lo + hi);
+                if brake(mid) <= room {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
             }
+            hi = lo;
         }
-        limits[k].speed = lo;
+        limits[k].speed = hi;
     }
+}
+
+/// The highest speed from which a jerk-limited ramp (starting and ending with zero
+/// acceleration, limits `accel` and `jerk`) slows down to `target` within `room`.
+///
+/// The ramp takes `T = 2·√(Δv/J)` while `Δv ≤ A²/J` and `T = Δv/A + A/J` beyond, and covers
+/// the mean of its end speeds times `T`. The first case is the cubic `u³ + 2w·u = room·√J`
+/// in `u = √Δv` (one real root, Cardano), the second a quadratic in the speed.
+pub fn braking_speed(target: f64, room: f64, accel: f64, jerk: f64) -> f64 {
+    let (w, a, j) = (target.max(0.0), accel, jerk);
+    let corner = a * a / j;
+    if room >= (2.0 * w + corner) * a / j {
+        // v² + (A²/J)·v + (w·A²/J − w² − 2A·room) = 0.
+        let c = w * corner - w * w - 2.0 * a * room;
+        return 0.5 * (-corner + (corner * corner - 4.0 * c).max(0.0).sqrt());
+    }
+    let (p, q) = (2.0 * w, room * j.sqrt());
+    let r = (0.25 * q * q + p * p * p / 27.0).sqrt();
+    let u = (0.5 * q + r).cbrt() + (0.5 * q - r).cbrt();
+    w + u.max(0.0) * u.max(0.0)
 }
 
 /// The limits that bind state `x`, each with how far it misses them (see [`misses`]).
@@ -274,4 +299,27 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     // No ramp keeps every limit (a state on a braking curve, off it by rounding): the one
     // for the worst miss follows that curve.
     fallback.unwrap_or(go)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn braking_speed_is_where_the_ramp_fills_the_room() {
+        // Both cases of the S-curve (peak acceleration reached or not), against the ramp's
+        // own integrated distance.
+        for &(w, room, a, j) in &[
+            (0.0, 5.0, 1000.0, 1e5),
+            (20.0, 0.3, 1000.0, 1e5),
+            (47.0, 0.01, 900.0, 1e9),
+            (3.0, 1e-4, 500.0, 2000.0),
+            (100.0, 50.0, 2000.0, 5e4),
+        ] {
+            let v = braking_speed(w, room, a, j);
+            assert!(v >= w);
+            let d = Ramp::new(v, 0.0, w, a, j).distance();
+            assert!((d - room).abs() <= 1e-9 * room.max(1.0), "{w} {room}: {d}");
+        }
+    }
 }
