@@ -53,7 +53,7 @@ impl Planner {
         w.jerk = f64::INFINITY;
         let (mut pre_accel, mut pre_jerk) = (f64::INFINITY, f64::INFINITY);
         let (mut low_speed, mut low_accel) = (f64::INFINITY, f64::INFINITY);
-        let mut jerk_before = f64::INFINITY;
+        let mut low_jerk = f64::INFINITY;
         // Path distance the next period can reach: a piece starting within it shares its
         // jerk limit with the current one for that period.
         let next_reach = s
@@ -74,10 +74,12 @@ impl Planner {
                 w.jerk = w.jerk.min(p.jerk);
             }
             let limit = p.speed_limit(self.factor);
-            // A jerk that drops at the start of a piece (one committed while the path state
-            // moved on the piece before it, see `commit_front`) is a limit too.
-            let jerk_drops = p.jerk < jerk_before;
-            jerk_before = p.jerk;
+            // A jerk below all before it in the window is a limit too: the state must
+            // reach that piece able to go on with its jerk (a piece committed while the
+            // path state moved on the piece before keeps its own, higher jerk, see
+            // `commit_front`). Meeting the lowest one ahead prepares for all higher ones.
+            let jerk_drops = p.jerk < low_jerk;
+            low_jerk = low_jerk.min(p.jerk);
             if limit < low_speed || p.accel < low_accel || (k > 0 && jerk_drops) {
                 low_speed = low_speed.min(limit);
                 low_accel = low_accel.min(p.accel);
