@@ -2,35 +2,18 @@
 //! corners blended) and the cost of one servo cycle of the speed generator.
 
 use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
-use klar_motion::{AxisLimits, Planner, PlannerConfig, Step};
+use klar_motion::{Planner, PlannerConfig, Step};
 use std::f64::consts::PI;
+
+#[path = "support/machine.rs"]
+mod machine;
 
 fn main() {
     divan::main();
 }
 
-/// The bench machine: 100 mm/s, 1000 mm/s², 1e5 mm/s³ per axis, 1 ms, 0.01 mm.
 fn config() -> PlannerConfig {
-    let l = AxisLimits {
-        max_velocity: 100.0,
-        max_acceleration: 1000.0,
-        max_jerk: 1e5,
-    };
-    PlannerConfig {
-        limits: [
-            Some(l),
-            Some(l),
-            Some(l),
-            None,
-            None,
-            None,
-            None,
-            None,
-            None,
-        ],
-        period: 0.001,
-        tolerance: 0.01,
-    }
+    machine::xyz(100.0, 1000.0, 1e5)
 }
 
 /// `n` chords of a circle of radius 25 mm (2000 chords per turn) at 50 mm/s.

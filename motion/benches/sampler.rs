@@ -3,33 +3,17 @@
 
 use klar_interp::op::SplineAxis;
 use klar_interp::{AxisLetter, Feed, Op, OpKind, Plane, Pose, SourceLoc};
-use klar_motion::{AxisLimits, Planner, PlannerConfig, Step};
+use klar_motion::{Planner, PlannerConfig, Step};
+
+#[path = "support/machine.rs"]
+mod machine;
 
 fn main() {
     divan::main();
 }
 
 fn config() -> PlannerConfig {
-    let l = AxisLimits {
-        max_velocity: 200.0,
-        max_acceleration: 2000.0,
-        max_jerk: 50_000.0,
-    };
-    PlannerConfig {
-        limits: [
-            Some(l),
-            Some(l),
-            Some(l),
-            None,
-            None,
-            None,
-            None,
-            None,
-            None,
-        ],
-        period: 0.001,
-        tolerance: 0.01,
-    }
+    machine::xyz(200.0, 2000.0, 50_000.0)
 }
 
 fn op(kind: OpKind) -> Op {

@@ -4,37 +4,20 @@
 //! p99.99 and the maximum. divan then measures the mean and median of the same call.
 
 use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
-use klar_motion::{AxisLimits, Planner, PlannerConfig, Step};
+use klar_motion::{Planner, PlannerConfig, Step};
 use std::f64::consts::PI;
 use std::time::Instant;
+
+#[path = "support/machine.rs"]
+mod machine;
 
 fn main() {
     print_percentiles();
     divan::main();
 }
 
-/// The bench machine: 100 mm/s, 1000 mm/s², 1e5 mm/s³ per axis, 1 ms, 0.01 mm.
 fn config() -> PlannerConfig {
-    let l = AxisLimits {
-        max_velocity: 100.0,
-        max_acceleration: 1000.0,
-        max_jerk: 1e5,
-    };
-    PlannerConfig {
-        limits: [
-            Some(l),
-            Some(l),
-            Some(l),
-            None,
-            None,
-            None,
-            None,
-            None,
-            None,
-        ],
-        period: 0.001,
-        tolerance: 0.01,
-    }
+    machine::xyz(100.0, 1000.0, 1e5)
 }
 
 /// Chords per turn of the R25 circle: 0.05 mm each.
