@@ -5,6 +5,12 @@ use super::speed::{self, Limit};
 use super::{Marker, Planner};
 use crate::profile::Ramp;
 
+/// Largest distance (mm) over which a limit may join the one before it.
+const MERGE_DISTANCE: f64 = 0.5;
+
+/// Largest relative drop in speed with which a limit may join the one before it.
+const MERGE_SHARE: f64 = 0.01;
+
 impl Planner {
     /// Index of the piece the path state moves on: the first that ends beyond it (a state
     /// exactly at a piece's end moves on the next one).
@@ -83,18 +89,37 @@ impl Planner {
             if limit < low_speed || p.accel < low_accel || (k > 0 && jerk_drops) {
                 low_speed = low_speed.min(limit);
                 low_accel = low_accel.min(p.accel);
-                // The ramp that meets this limit arrives in a state the piece's own jerk
-                // can continue from: it uses the lower of the two jerks.
-                w.limits.push(Limit {
-                    at: p.start,
-                    speed: limit,
-                    accel_after: p.accel,
-                    accel: pre_accel,
-                    jerk: pre_jerk.min(p.jerk),
-                });
-                // Limits further on are checked from this one (see `speed::settle`).
-                pre_accel = p.accel;
-                pre_jerk = p.jerk;
+                match w.limits.last_mut() {
+                    // A limit barely below one just before it (dense code, where the speed
+                    // limits of the blends drift down piece by piece) joins that one: its
+                    // limits then hold from the earlier place on, which is stricter, and the
+                    // window stays short.
+                    Some(last)
+                        if last.at > s
+                            && p.start - last.at <= MERGE_DISTANCE
+                            && limit >= last.speed * (1.0 - MERGE_SHARE) =>
+                    {
+                        last.speed = last.speed.min(limit);
+                        last.accel_after = last.accel_after.min(p.accel);
+                        last.jerk = last.jerk.min(p.jerk);
+                        pre_accel = pre_accel.min(p.accel);
+                        pre_jerk = pre_jerk.min(p.jerk);
+                    }
+                    _ => {
+                        // The ramp that meets this limit arrives in a state the piece's own
+                        // jerk can continue from: it uses the lower of the two jerks.
+                        w.limits.push(Limit {
+                            at: p.start,
+                            speed: limit,
+                            accel_after: p.accel,
+                            accel: pre_accel,
+                            jerk: pre_jerk.min(p.jerk),
+                        });
+                        // Limits further on are checked from this one (see `speed::settle`).
+                        pre_accel = p.accel;
+                        pre_jerk = p.jerk;
+                    }
+                }
             }
             if p.accel < pre_accel || p.jerk < pre_jerk {
                 pre_accel = pre_accel.min(p.accel);
