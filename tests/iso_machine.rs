@@ -11,7 +11,6 @@ mod common;
 use common::temp_program;
 use klar::config::{BUILTIN_MILL5, MachineConfig};
 use klar_interp::{AxisLetter, DatumTable, Interpreter, Op, OpKind, Pose};
-use klar_motion::comp::Compensator;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -208,30 +207,7 @@ END PGM RECT MM
 /// machine, working-plane ops on, through the compensation stage.
 fn tool_centre(program: &Path, machine: &MachineConfig) -> Vec<Op> {
     let start = machine.start_pose();
-    let mut interp = machine.open_program(program, start).expect("opens");
-    interp.set_working_plane_ops(true);
-    let mut comp = Compensator::new(start);
-    let mut out = Vec::new();
-    for op in interp {
-        let op = op.unwrap_or_else(|d| panic!("program error: {d}"));
-        comp.push(op)
-            .unwrap_or_else(|e| panic!("compensation: {e}"));
-        while let Some(o) = comp.pop() {
-            out.push(o);
-        }
-    }
-    comp.finish()
-        .unwrap_or_else(|e| panic!("compensation: {e}"));
-    while let Some(o) = comp.pop() {
-        out.push(o);
-    }
-    out
-}
-
-/// Rx(30°) applied to `v`, written out.
-fn rx30(v: [f64; 3]) -> [f64; 3] {
-    let (s, c) = 30f64.to_radians().sin_cos();
-    [v[0], c * v[1] - s * v[2], s * v[1] + c * v[2]]
+    common::compensated(machine.open_program(program, start).expect("opens"), start)
 }
 
 #[test]
@@ -266,7 +242,7 @@ fn g41_in_a_tilted_iso_plane_compensates_like_the_klartext_twin() {
     ];
     assert_eq!(ends.len(), expect.len(), "{ends:?}");
     for (g, e) in ends.iter().zip(expect) {
-        let w = rx30(e);
+        let w = common::mill5::rx(30.0, e);
         let d = ((g[0] - w[0]).powi(2) + (g[1] - w[1]).powi(2) + (g[2] - w[2]).powi(2)).sqrt();
         assert!(d < 1e-9, "{g:?} vs {w:?}");
     }

@@ -7,7 +7,6 @@ mod common;
 
 use klar::config::MachineConfig;
 use klar_interp::{AxisLetter, Interpreter, Op, OpKind, Pose};
-use klar_motion::comp::Compensator;
 
 const AC: [AxisLetter; 5] = [
     AxisLetter::X,
@@ -16,12 +15,6 @@ const AC: [AxisLetter; 5] = [
     AxisLetter::A,
     AxisLetter::C,
 ];
-
-/// Rx(30°) applied to `v`, written out.
-fn rx30(v: [f64; 3]) -> [f64; 3] {
-    let (s, c) = 30f64.to_radians().sin_cos();
-    [v[0], c * v[1] - s * v[2], s * v[1] + c * v[2]]
-}
 
 /// Rx(−30°) applied to `v`: back into the tilted system.
 fn rx30_back(v: [f64; 3]) -> [f64; 3] {
@@ -41,24 +34,8 @@ fn dist(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// them: working-plane ops on, through the compensator.
 fn tool_centre(body: &str) -> Vec<Op> {
     let text = format!("BEGIN PGM T MM\n{body}\nEND PGM T MM\n");
-    let mut interp = Interpreter::from_source("t.h", &text, Pose::ZERO).with_rotary_axes(&AC);
-    interp.set_working_plane_ops(true);
-    let mut comp = Compensator::new(Pose::ZERO);
-    let mut out = Vec::new();
-    for op in interp {
-        let op = op.unwrap_or_else(|d| panic!("program error: {d}"));
-        comp.push(op)
-            .unwrap_or_else(|e| panic!("compensation: {e}"));
-        while let Some(o) = comp.pop() {
-            out.push(o);
-        }
-    }
-    comp.finish()
-        .unwrap_or_else(|e| panic!("compensation: {e}"));
-    while let Some(o) = comp.pop() {
-        out.push(o);
-    }
-    out
+    let interp = Interpreter::from_source("t.h", &text, Pose::ZERO).with_rotary_axes(&AC);
+    common::compensated(interp, Pose::ZERO)
 }
 
 /// End points of the motion ops, in order.
@@ -110,7 +87,7 @@ fn follows(got: &[[f64; 3]], path: &[Piece], corners: &[[f64; 3]]) {
     let mut next = corners.iter().peekable();
     for p in got {
         if let Some(c) = next.peek()
-            && dist(*p, rx30(**c)) < 1e-9
+            && dist(*p, common::mill5::rx(30.0, **c)) < 1e-9
         {
             next.next();
         }
@@ -158,9 +135,13 @@ fn a_rectangle_with_rl_is_offset_inside_the_tilted_plane() {
     ];
     assert_eq!(got.len(), expect.len(), "{got:?}");
     // The tilted plane at depth −2: n · p = −2 with n = Rx(30)·(0, 0, 1) = (0, −½, √3/2).
-    let n = rx30([0.0, 0.0, 1.0]);
+    let n = common::mill5::rx(30.0, [0.0, 0.0, 1.0]);
     for (g, e) in got.iter().zip(expect) {
-        assert!(dist(*g, rx30(e)) < 1e-9, "{g:?} vs {:?}", rx30(e));
+        assert!(
+            dist(*g, common::mill5::rx(30.0, e)) < 1e-9,
+            "{g:?} vs {:?}",
+            common::mill5::rx(30.0, e)
+        );
         if e[2] == -2.0 {
             let height = g[0] * n[0] + g[1] * n[1] + g[2] * n[2];
             assert!((height + 2.0).abs() < 1e-9, "{g:?} off the plane");
@@ -260,7 +241,7 @@ fn the_tilted_path_is_the_untilted_path_turned() {
         assert!(corners.len() >= 9);
         follows(&tilted[1..], &pieces(&flat), &corners[1..]);
         let (a, b) = (tilted[tilted.len() - 1], corners[corners.len() - 1]);
-        assert!(dist(a, rx30(b)) < 1e-9);
+        assert!(dist(a, common::mill5::rx(30.0, b)) < 1e-9);
     }
 }
 
@@ -363,7 +344,7 @@ SPL X+0 Y+0 K3X+1 K2X+0 K1X+2 K3Y+0 K2Y+2 K1Y+0 F500",
         panic!("not one spline: {ops:?}")
     };
     for t in [0.0, 0.3, 0.7, 1.0] {
-        let want = rx30([t * t * t + 2.0 * t, 2.0 * t * t, 0.0]);
+        let want = common::mill5::rx(30.0, [t * t * t + 2.0 * t, 2.0 * t * t, 0.0]);
         for (i, letter) in [AxisLetter::X, AxisLetter::Y, AxisLetter::Z]
             .into_iter()
             .enumerate()

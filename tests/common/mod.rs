@@ -169,3 +169,28 @@ pub fn distance_to_rectangle(p: [f64; 2]) -> f64 {
         .map(|e| distance_to(e, p))
         .fold(f64::INFINITY, f64::min)
 }
+
+/// The tool-centre ops of `interp` as `klar run` builds them: working-plane ops on, through
+/// the radius compensation stage, starting at `start`.
+pub fn compensated(
+    mut interp: klar_interp::Interpreter,
+    start: klar_interp::Pose,
+) -> Vec<klar_interp::Op> {
+    interp.set_working_plane_ops(true);
+    let mut comp = klar_motion::comp::Compensator::new(start);
+    let mut out = Vec::new();
+    for op in interp {
+        let op = op.unwrap_or_else(|d| panic!("program error: {d}"));
+        comp.push(op)
+            .unwrap_or_else(|e| panic!("compensation: {e}"));
+        while let Some(o) = comp.pop() {
+            out.push(o);
+        }
+    }
+    comp.finish()
+        .unwrap_or_else(|e| panic!("compensation: {e}"));
+    while let Some(o) = comp.pop() {
+        out.push(o);
+    }
+    out
+}
