@@ -6,6 +6,7 @@
 //! and curvature are continuous along the blended path (G2). [`corner`] builds one between
 //! two elements and checks its distance from the programmed contour.
 
+mod bounds;
 pub mod corner;
 pub mod quintic;
 

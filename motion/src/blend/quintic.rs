@@ -6,20 +6,15 @@
 //! exactly t and k: the curve continues position, tangent and curvature of its neighbours.
 //!
 //! Path distance is the arc length over X Y Z U V W, tabulated by [`crate::geom::arclen`]
-//! (Gauss–Legendre quadrature on [`TABLE_INTERVALS`] intervals of u, inverted by safeguarded
-//! Newton steps).
+//! (Gauss–Legendre quadrature on 2 or [`TABLE_INTERVALS`] intervals of u, inverted by
+//! safeguarded Newton steps).
 
+use super::bounds::{Exact, derivative_bounds};
 use crate::geom::{AxisBounds, Metric, PathPoint, arclen};
 use klar_interp::Pose;
 
-/// Intervals of u in the arc-length table.
+/// Intervals of u in the arc-length table at most.
 pub const TABLE_INTERVALS: usize = 16;
-
-/// Parameter values at which derivative bounds are sampled (plus both ends).
-const BOUND_SAMPLES: usize = 32;
-
-/// Safety factor on sampled derivative bounds.
-const BOUND_MARGIN: f64 = 1.1;
 
 /// Smallest accepted parameter speed |P′(u)| relative to the chord: below it the curve
 /// nearly stops and turns (a cusp), which no axis could follow at speed.
@@ -32,12 +27,16 @@ pub struct Quintic {
     c: [[f64; 6]; 9],
     from: Pose,
     to: Pose,
-    /// Arc length from u = 0 to u = i / TABLE_INTERVALS.
+    /// Arc length from u = 0 to u = i / intervals.
     table: [f64; TABLE_INTERVALS + 1],
+    /// Intervals of u used in `table` (at most [`TABLE_INTERVALS`]).
+    intervals: usize,
     bounds: AxisBounds,
     /// Pose indices whose coordinate changes along the curve (the others stay at `c[i][0]`
     /// and are skipped when evaluating).
     moving: [bool; 9],
+    /// Coefficients of |P′(u)|² over the linear axes (lowest first), set by `finish`.
+    speed2: [f64; 9],
 }
 
 /// P and its first three u-derivatives at one parameter value.
@@ -57,7 +56,9 @@ impl Quintic {
     /// and curvature vector (`d2`). `None` when the ends coincide, a value is not finite or
     /// the curve has a cusp.
     pub fn hermite(start: &PathPoint, end: &PathPoint) -> Option<Quintic> {
-        Quintic::shape(start, end)?.finish()
+        let mut q = Quintic::shape(start, end)?;
+        q.finish()?;
+        Some(q)
     }
 
     /// The curve's coefficients only: enough for [`Quintic::pose_at_parameter`], which the
@@ -97,30 +98,32 @@ impl Quintic {
             from: start.pose,
             to: end.pose,
             table: [0.0; TABLE_INTERVALS + 1],
+            intervals: TABLE_INTERVALS,
             bounds: AxisBounds::default(),
             moving,
+            speed2: [0.0; 9],
         })
     }
 
-    /// Completes a curve from [`Quintic::shape`]: refuses cusps, tabulates the arc length
-    /// and samples the derivative bounds.
-    pub(crate) fn finish(mut self) -> Option<Quintic> {
+    /// Completes a curve from [`Quintic::shape`]: refuses cusps, bounds the derivatives and
+    /// tabulates the arc length.
+    pub(crate) fn finish(&mut self) -> Option<()> {
         let mut chord = [0.0; 9];
         for (i, c) in chord.iter_mut().enumerate() {
             *c = self.to.0[i] - self.from.0[i];
         }
         let lambda = Metric::Linear.norm(&chord);
-        let q = &mut self;
         // Refuse cusps: the parameter speed must stay well away from zero.
-        q.bounds = q.sample_bounds(MIN_PARAMETER_SPEED * lambda)?;
+        self.bounds =
+            derivative_bounds(&self.c, &self.moving, MIN_PARAMETER_SPEED * lambda, |u| {
+                self.exact(u)
+            })?;
+        self.speed2 = self.speed_squared();
         let mut table = [0.0; TABLE_INTERVALS + 1];
-        arclen::fill_table(&mut table, |u| q.speed(u));
-        q.table = table;
-        let total = table[TABLE_INTERVALS];
-        if !(total.is_finite() && total > 0.0) {
-            return None;
-        }
-        Some(self)
+        self.intervals = arclen::fill_table_adaptive(&mut table, |u| self.speed(u));
+        self.table = table;
+        let total = self.length();
+        (total.is_finite() && total > 0.0).then_some(())
     }
 
     fn derivs(&self, u: f64) -> Derivs {
@@ -146,21 +149,36 @@ impl Quintic {
 
     /// |P′(u)| over the linear axes.
     fn speed(&self, u: f64) -> f64 {
-        let mut sum = 0.0;
+        let g = self.speed2.iter().rev().fold(0.0, |acc, k| acc * u + k);
+        g.max(0.0).sqrt()
+    }
+
+    /// The coefficients of |P′(u)|² over the linear axes.
+    fn speed_squared(&self) -> [f64; 9] {
+        let mut g = [0.0; 9];
         for &i in Metric::Linear.axes() {
             if !self.moving[i] {
                 continue;
             }
             let c = &self.c[i];
-            let d1 = c[1] + u * (2.0 * c[2] + u * (3.0 * c[3] + u * (4.0 * c[4] + u * 5.0 * c[5])));
-            sum += d1 * d1;
+            let d = [c[1], 2.0 * c[2], 3.0 * c[3], 4.0 * c[4], 5.0 * c[5]];
+            for (j, a) in d.iter().enumerate() {
+                for (k, b) in d.iter().enumerate() {
+                    g[j + k] += a * b;
+                }
+            }
         }
-        sum.sqrt()
+        g
     }
 
     /// Path length (mm).
     pub fn length(&self) -> f64 {
-        self.table[TABLE_INTERVALS]
+        self.table().last().copied().unwrap_or(0.0)
+    }
+
+    /// The used part of the arc-length table.
+    fn table(&self) -> &[f64] {
+        self.table.get(..=self.intervals).unwrap_or(&self.table)
     }
 
     /// Start pose.
@@ -175,7 +193,7 @@ impl Quintic {
 
     /// The parameter u at path distance `s` (clamped to the curve).
     pub fn parameter_at(&self, s: f64) -> f64 {
-        arclen::parameter_at(&self.table, s, |u| self.speed(u))
+        arclen::parameter_at(self.table(), s, |u| self.speed(u))
     }
 
     /// Pose and its first two derivatives with respect to path distance at `s`; exactly
@@ -212,41 +230,38 @@ impl Quintic {
         Pose(p)
     }
 
-    /// Bounds of |dⁿq/dsⁿ| per axis, n = 1, 2, 3 (sampled maxima times a margin).
+    /// The curve's Bézier control points (Bernstein coefficients on u ∈ [0, 1]): the curve
+    /// lies in their convex hull.
+    pub(crate) fn control_points(&self) -> [Pose; 6] {
+        let mut b = [Pose([0.0; 9]); 6];
+        for (i, c) in self.c.iter().enumerate() {
+            // bⱼ = Σₖ₌₀..ⱼ C(j, k) / C(5, k) · cₖ.
+            let (c1, c2, c3, c4) = (c[1] / 5.0, c[2] / 10.0, c[3] / 10.0, c[4] / 5.0);
+            b[0].0[i] = c[0];
+            b[1].0[i] = c[0] + c1;
+            b[2].0[i] = c[0] + 2.0 * c1 + c2;
+            b[3].0[i] = c[0] + 3.0 * c1 + 3.0 * c2 + c3;
+            b[4].0[i] = c[0] + 4.0 * c1 + 6.0 * c2 + 4.0 * c3 + c4;
+            b[5].0[i] = c[0] + c[1] + c[2] + c[3] + c[4] + c[5];
+        }
+        b
+    }
+
+    /// Bounds of |dⁿq/dsⁿ| per axis, n = 1, 2, 3, over the whole curve (see
+    /// [`super::bounds`]).
     pub fn bounds(&self) -> AxisBounds {
         self.bounds
     }
 
-    /// The sampled bounds; `None` when the parameter speed falls below `min_speed` at a
-    /// sample (a cusp).
-    fn sample_bounds(&self, min_speed: f64) -> Option<AxisBounds> {
-        let mut b = AxisBounds::default();
-        for k in 0..=BOUND_SAMPLES {
-            let d = self.derivs(k as f64 / BOUND_SAMPLES as f64);
-            let sigma = dot(&d.d1, &d.d1).sqrt();
-            if sigma.is_nan() || sigma < min_speed {
-                return None;
-            }
-            let (t1, t2, t3) = arc_derivs(&d, &self.moving);
-            for i in 0..9 {
-                b.d1[i] = b.d1[i].max(t1[i].abs());
-                b.d2[i] = b.d2[i].max(t2[i].abs());
-                b.d3[i] = b.d3[i].max(t3[i].abs());
-            }
+    /// Exact arc-length derivatives and the parameter speed at `u`.
+    fn exact(&self, u: f64) -> Exact {
+        let d = self.derivs(u);
+        let sigma = dot(&d.d1, &d.d1).sqrt();
+        let (t1, t2, t3) = arc_derivs(&d, &self.moving);
+        Exact {
+            t: [t1, t2, t3],
+            sigma,
         }
-        for x in b.d2.iter_mut().chain(b.d3.iter_mut()) {
-            *x *= BOUND_MARGIN;
-        }
-        for (i, x) in b.d1.iter_mut().enumerate() {
-            *x *= BOUND_MARGIN;
-            // A unit tangent has no linear component above 1.
-            if Metric::Linear.axes().contains(&i) {
-                *x = x.min(1.0);
-            }
-        }
-        // Blends join linear moves only: their path distance is the linear arc length.
-        b.curvature = Metric::Linear.norm(&b.d2);
-        Some(b)
     }
 }
 
@@ -276,4 +291,161 @@ fn arc_derivs(d: &Derivs, moving: &[bool; 9]) -> ([f64; 9], [f64; 9], [f64; 9]) 
         t3[i] = dt2 * i1;
     }
     (t1, t2, t3)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A path point from position, tangent and curvature vector in X Y Z (plus extra axes).
+    fn at(p: [f64; 3], t: [f64; 3], k: [f64; 3]) -> PathPoint {
+        let mut pp = PathPoint {
+            pose: Pose::ZERO,
+            d1: [0.0; 9],
+            d2: [0.0; 9],
+        };
+        pp.pose.0[..3].copy_from_slice(&p);
+        pp.d1[..3].copy_from_slice(&t);
+        pp.d2[..3].copy_from_slice(&k);
+        pp
+    }
+
+    /// Blends of different character: sharp and gentle line corners, a short stretch of a
+    /// circle (dense CAM code), a spatial corner, and one with a rotary axis turning along.
+    fn blends() -> Vec<Quintic> {
+        let mut v = Vec::new();
+        for deg in [5.0f64, 30.0, 60.0, 90.0, 119.0] {
+            let th = deg.to_radians();
+            let d = 0.7;
+            let a = at([-d, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0; 3]);
+            let b = at(
+                [d * th.cos(), d * th.sin(), 0.0],
+                [th.cos(), th.sin(), 0.0],
+                [0.0; 3],
+            );
+            v.push(Quintic::hermite(&a, &b).expect("corner blend"));
+        }
+        // Circle R25, 2000 chords per turn: from one chord midpoint to the next.
+        let r = 25.0;
+        let circle = |phi: f64| {
+            at(
+                [r * phi.cos(), r * phi.sin(), 0.0],
+                [-phi.sin(), phi.cos(), 0.0],
+                [-phi.cos() / r, -phi.sin() / r, 0.0],
+            )
+        };
+        let step = std::f64::consts::TAU / 2000.0;
+        v.push(Quintic::hermite(&circle(0.3), &circle(0.3 + step)).expect("arc blend"));
+        // A corner in space with a curvature jump at one end.
+        let n = (1.0f64 + 0.25 + 0.04).sqrt();
+        let a = at([0.0; 3], [1.0 / n, 0.5 / n, 0.2 / n], [0.0, 0.0, 0.0]);
+        let b = at([0.5, 0.6, 0.3], [0.0, 1.0, 0.0], [-2.0, 0.0, 0.0]);
+        v.push(Quintic::hermite(&a, &b).expect("spatial blend"));
+        // X Y corner with A turning 10°/mm along it.
+        let mut a = at([-0.5, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0; 3]);
+        let mut b = at([0.0, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0; 3]);
+        a.d1[3] = 10.0;
+        b.d1[3] = 10.0;
+        b.pose.0[3] = 7.5;
+        v.push(Quintic::hermite(&a, &b).expect("blend with a rotary axis"));
+        v
+    }
+
+    #[test]
+    fn derivative_bounds_cover_dense_samples_and_finite_differences() {
+        for q in blends() {
+            let b = q.bounds();
+            // Exact derivatives on a grid 64 times finer than any interval bound.
+            for k in 0..=2048 {
+                let e = q.exact(k as f64 / 2048.0);
+                for i in 0..9 {
+                    assert!(
+                        e.t[0][i].abs() <= b.d1[i],
+                        "q′ axis {i}: {} > {}",
+                        e.t[0][i],
+                        b.d1[i]
+                    );
+                    assert!(
+                        e.t[1][i].abs() <= b.d2[i],
+                        "q″ axis {i}: {} > {}",
+                        e.t[1][i],
+                        b.d2[i]
+                    );
+                    assert!(
+                        e.t[2][i].abs() <= b.d3[i],
+                        "q‴ axis {i}: {} > {}",
+                        e.t[2][i],
+                        b.d3[i]
+                    );
+                }
+            }
+            // Independently of the chord-rule formulas: central differences of the pose
+            // along the path (step h; their error is far below the 2 % allowed).
+            let len = q.length();
+            let h = len / 400.0;
+            let pos = |s: f64| q.point(s).pose.0;
+            let mut s = 2.0 * h;
+            while s <= len - 2.0 * h {
+                let (m2, m1, p0, p1, p2) = (
+                    pos(s - 2.0 * h),
+                    pos(s - h),
+                    pos(s),
+                    pos(s + h),
+                    pos(s + 2.0 * h),
+                );
+                for i in 0..9 {
+                    let d2 = (p1[i] - 2.0 * p0[i] + m1[i]) / (h * h);
+                    let d3 = (p2[i] - 2.0 * p1[i] + 2.0 * m1[i] - m2[i]) / (2.0 * h * h * h);
+                    assert!(
+                        d2.abs() <= 1.02 * b.d2[i] + 1e-6,
+                        "fd q″ axis {i} at {s}: {d2} > {}",
+                        b.d2[i]
+                    );
+                    assert!(
+                        d3.abs() <= 1.02 * b.d3[i] + 1e-3 * (1.0 + b.d3[i]),
+                        "fd q‴ axis {i} at {s}: {d3} > {}",
+                        b.d3[i]
+                    );
+                }
+                s += h;
+            }
+        }
+    }
+
+    #[test]
+    fn derivative_bounds_exceed_the_largest_value_by_a_tenth_at_most() {
+        // Where the interval bounds are tight, each bound is 1.1 times exact values; an axis
+        // whose bound is below 1 % of the largest of the same order may keep a wider one.
+        for (j, q) in blends().into_iter().enumerate() {
+            let b = q.bounds();
+            let mut top = [[0.0f64; 9]; 3];
+            for k in 0..=4096 {
+                let e = q.exact(k as f64 / 4096.0);
+                for (top_n, t_n) in top.iter_mut().zip(&e.t) {
+                    for (m, t) in top_n.iter_mut().zip(t_n) {
+                        *m = m.max(t.abs());
+                    }
+                }
+            }
+            for i in 0..9 {
+                for (n, bound) in [b.d1[i], b.d2[i], b.d3[i]].into_iter().enumerate() {
+                    let floor = 0.011 * top[n].iter().fold(0.0f64, |m, x| m.max(*x));
+                    assert!(
+                        bound <= (1.1 * top[n][i]).max(floor) * (1.0 + 1e-9),
+                        "blend {j} order {} axis {i}: {bound} vs largest {}",
+                        n + 1,
+                        top[n][i]
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_blend_that_nearly_stops_and_turns_is_refused() {
+        // Ends 1 µm apart with opposite tangents: the curve has to turn back on itself.
+        let a = at([0.0; 3], [1.0, 0.0, 0.0], [0.0; 3]);
+        let b = at([1e-3, 0.0, 0.0], [-1.0, 0.0, 0.0], [0.0; 3]);
+        assert!(Quintic::hermite(&a, &b).is_none());
+    }
 }

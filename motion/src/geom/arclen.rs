@@ -44,6 +44,29 @@ pub fn fill_table(table: &mut [f64], speed: impl Fn(f64) -> f64) {
     }
 }
 
+/// Relative difference between the length from one panel and from two half panels below
+/// which two panels are taken as exact (the error of the halves is then far smaller still).
+const COARSE_AGREEMENT: f64 = 1e-12;
+
+/// Fills `table` like [`fill_table`], but with two intervals when the quadrature on them
+/// already agrees with the one on the whole of [0, 1] to [`COARSE_AGREEMENT`] (a curve whose
+/// parameter speed varies little); returns the number of intervals used (`table[..=n]`).
+pub fn fill_table_adaptive(table: &mut [f64], speed: impl Fn(f64) -> f64) -> usize {
+    if table.len() > 3 {
+        let whole = integrate(0.0, 1.0, &speed);
+        let left = integrate(0.0, 0.5, &speed);
+        let total = left + integrate(0.5, 1.0, &speed);
+        if (whole - total).abs() <= COARSE_AGREEMENT * total {
+            table[0] = 0.0;
+            table[1] = left;
+            table[2] = total;
+            return 2;
+        }
+    }
+    fill_table(table, speed);
+    table.len().saturating_sub(1)
+}
+
 /// The parameter u at path distance `s`, clamped to [0, 1], for a table made by
 /// [`fill_table`] with the same `speed`.
 pub fn parameter_at(table: &[f64], s: f64, speed: impl Fn(f64) -> f64) -> f64 {
@@ -110,5 +133,25 @@ mod tests {
         assert!((u - 0.3).abs() < 1e-12, "{u}");
         assert_eq!(parameter_at(&table, -1.0, speed), 0.0);
         assert_eq!(parameter_at(&table, 10.0, speed), 1.0);
+    }
+
+    #[test]
+    fn an_adaptive_table_is_coarse_only_where_the_speed_hardly_varies() {
+        // Constant speed 5 (P(u) = (3u, 4u)): two intervals, exact to rounding.
+        let mut table = [0.0; 17];
+        assert_eq!(fill_table_adaptive(&mut table, |_| 5.0), 2);
+        assert_eq!(table[0], 0.0);
+        assert!((table[1] - 2.5).abs() < 1e-15 && (table[2] - 5.0).abs() < 1e-15);
+        // Speed 1 + u/1000 (length 1 + 1/2000 by hand): a polynomial of degree 1, which
+        // Gauss–Legendre integrates exactly on any panel.
+        let n = fill_table_adaptive(&mut table, |u| 1.0 + u / 1000.0);
+        assert_eq!(n, 2);
+        assert!((table[2] - 1.0005).abs() < 1e-15);
+        // The parabola's speed sqrt(1 + 4u²) varies too much: all 16 intervals, and the
+        // closed-form length sqrt(5)/2 + asinh(2)/4.
+        let speed = |u: f64| (1.0 + 4.0 * u * u).sqrt();
+        assert_eq!(fill_table_adaptive(&mut table, speed), 16);
+        let exact = 5f64.sqrt() / 2.0 + 2f64.asinh() / 4.0;
+        assert!((table[16] - exact).abs() < 1e-12);
     }
 }

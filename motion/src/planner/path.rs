@@ -151,11 +151,44 @@ pub struct Element {
     pub split: Option<[f64; 9]>,
 }
 
+/// A new piece: its shape, where on the shape it starts, its length, feed and block.
+pub type NewPiece = (Shape, f64, f64, Option<f64>, SourceLoc);
+
+/// The pieces committing one element produces: the element's own part and the blend after
+/// it, kept inline (no allocation per element); any further piece goes to `more`.
+#[derive(Debug, Default)]
+pub struct NewPieces {
+    slots: [Option<NewPiece>; 2],
+    more: Vec<NewPiece>,
+}
+
+impl NewPieces {
+    fn push(&mut self, piece: NewPiece) {
+        match self.slots.iter_mut().find(|s| s.is_none()) {
+            Some(slot) => *slot = Some(piece),
+            None => self.more.push(piece),
+        }
+    }
+}
+
+impl IntoIterator for NewPieces {
+    type Item = NewPiece;
+    type IntoIter = std::iter::Chain<
+        std::iter::Flatten<std::array::IntoIter<Option<NewPiece>, 2>>,
+        std::vec::IntoIter<NewPiece>,
+    >;
+
+    /// The pieces in path order.
+    fn into_iter(self) -> Self::IntoIter {
+        self.slots.into_iter().flatten().chain(self.more)
+    }
+}
+
 /// What committing one element produced.
 #[derive(Debug, Default)]
 pub struct Committed {
     /// New pieces in path order.
-    pub pieces: Vec<(Shape, f64, f64, Option<f64>, SourceLoc)>,
+    pub pieces: NewPieces,
     /// True when the path must stop where it ended before these pieces.
     pub stop_first: bool,
     /// True when the path must stop after all new pieces.
@@ -311,8 +344,15 @@ fn too_slow(
 }
 
 /// The curvature vector to give `mid` at its midpoint when it can become a split point
-/// between `prev` and `next`.
-fn split_curvature(prev: &Element, mid: &Element, next: &Element, tol: f64) -> Option<[f64; 9]> {
+/// between `prev` and `next`; `tp` and `tm` are the unit tangents at the end of `prev` and
+/// the start of `mid`, `turn` the angle between them.
+fn split_curvature(
+    prev: &Element,
+    mid: &Element,
+    next: &Element,
+    tol: f64,
+    (tp, tm, turn): (&[f64; 9], &[f64; 9], f64),
+) -> Option<[f64; 9]> {
     if !matches!(mid.segment, Segment::Line(_))
         || mid.segment.metric() != Metric::Linear
         || next.segment.metric() != Metric::Linear
@@ -322,10 +362,8 @@ fn split_curvature(prev: &Element, mid: &Element, next: &Element, tol: f64) -> O
     let lp = prev.segment.length();
     let lm = mid.segment.length();
     let ln = next.segment.length();
-    let tp = prev.segment.point(lp).d1;
-    let tm = mid.segment.point(0.0).d1;
     let tn = next.segment.point(0.0).d1;
-    let worst = angle(&tp, &tm).max(angle(&tm, &tn));
+    let worst = turn.max(angle(tm, &tn));
     if worst > SPLIT_MAX_ANGLE || lm * worst > 2.0 * tol || tol.min(next.tolerance) <= 0.0 {
         return None;
     }
@@ -334,8 +372,8 @@ fn split_curvature(prev: &Element, mid: &Element, next: &Element, tol: f64) -> O
     for (i, x) in k.iter_mut().enumerate() {
         *x = (tn[i] - tp[i]) / ds;
     }
-    let along = Metric::Linear.dot(&k, &tm);
-    for (x, t) in k.iter_mut().zip(&tm) {
+    let along = Metric::Linear.dot(&k, tm);
+    for (x, t) in k.iter_mut().zip(tm) {
         *x -= along * t;
     }
     k.iter().all(|x| x.is_finite()).then_some(k)
@@ -352,14 +390,15 @@ fn try_corner(
 ) -> Option<Committed> {
     let len = cur.segment.length();
     let nlen = next.segment.length();
-    let mut right_split = after.and_then(|a| split_curvature(cur, next, a, tol));
-    let left_fixed = cur.split;
     let t_end = cur.segment.point(len);
     let t_start = next.segment.point(0.0);
     let theta = angle(&t_end.d1, &t_start.d1);
     if theta > MAX_BLEND_ANGLE {
         return None;
     }
+    let turn = (&t_end.d1, &t_start.d1, theta);
+    let mut right_split = after.and_then(|a| split_curvature(cur, next, a, tol, turn));
+    let left_fixed = cur.split;
     let cap_left = (len - cur.trim).min(0.5 * len).max(0.0);
     let cap_right = 0.5 * nlen;
     // First guess from the corner angle (or the curvature jump of a tangent joint).
@@ -403,22 +442,18 @@ fn try_corner(
             },
         ];
         if let Some((curve, _)) = blend_within(&a, &b, &contour, tol) {
-            let mut out = Committed::default();
-            push_part(&mut out, cur, cur.trim, len - dl);
             let length = curve.length();
             let feed = match (cur.feed, next.feed) {
                 (Some(x), Some(y)) => Some(x.min(y)),
                 (x, y) => x.or(y),
             };
-            let shape = Shape::Blend(Box::new(curve));
+            let shape = Shape::Blend(curve);
             if theta > SPLIT_MAX_ANGLE && too_slow(&shape, length, feed, cur, next, limits) {
                 return None;
             }
-            let Shape::Blend(curve) = shape else {
-                return None;
-            };
-            out.pieces
-                .push((Shape::Blend(curve), 0.0, length, feed, next.loc));
+            let mut out = Committed::default();
+            push_part(&mut out, cur, cur.trim, len - dl);
+            out.pieces.push((shape, 0.0, length, feed, next.loc));
             next.trim = dr;
             next.split = right_split;
             return Some(out);
