@@ -7,8 +7,8 @@
 //! q̇ = q′·v        q̈ = q′·a + q″·v²        q⃛ = q′·j + 3·q″·v·a + q‴·v³
 //! ```
 //!
-//! With c₁, c₂, c₃ the segment's bounds of |q′|, |q″|, |q‴| ([`AxisBounds`]) and constant
-//! path limits V, A, J over the segment, each axis stays within (v, a, j) limits when
+//! With c₁, c₂, c₃ the segment's bounds of |q′|, |q″|, |q‴| ([`AxisBounds`]) and path
+//! limits V, A, J over the segment, each axis stays within (v, a, j) limits when
 //!
 //! ```text
 //! c₁·V ≤ v_max      c₁·A + c₂·V² ≤ a_max      c₁·J + 3·c₂·V·A + c₃·V³ ≤ j_max
@@ -20,32 +20,129 @@
 //! correction), so the terms add in quadrature instead:
 //!
 //! ```text
-//! √((W·A)² + (c₂·V²)²) + o·A ≤ a_max      √((W·J + c₃·V³)² + (3·c₂·V·A)²) + o·J ≤ j_max
+//! √((W·A)² + (c₂·v²)²) + o·A ≤ a_max      √((W·J + c₃·V³)² + (3·c₂·V·A)²) + o·J ≤ j_max
 //! ```
 //!
 //! More generally, on any move whose path distance is its length over the linear axes, the
 //! unit tangent q′ and the curvature vector q″ (length κ) are orthogonal, so each linear
-//! axis's acceleration `q′·A + q″·V²` is at most `√(A² + (κ·V²)²)` (Cauchy–Schwarz with
+//! axis's acceleration `q′·A + q″·v²` is at most `√(A² + (κ·v²)²)` (Cauchy–Schwarz with
 //! `q′ᵢ² + (q″ᵢ/κ)² ≤ 1`). Blends and splines use whichever of the two forms allows more.
 //!
-//! The budget is split so the speed keeps a share of each limit for speeding up and slowing
-//! down: the curvature term gets at most half of the acceleration limit (0.8 of it where the
-//! quadrature applies, which leaves 0.6), c₃·V³ at most a quarter of the jerk limit, 3·c₂·V·A at
-//! most a quarter (0.6 in quadrature on arcs); A and J then take what is left. On a line
-//! (c₂ = c₃ = 0) this is exactly the axis limits projected on the direction.
+//! The quadrature forms hold at every instant with the speed v of that instant, so the
+//! acceleration the path may use depends on its speed: [`Grip`], `√(P² − (K·v²)²)`, all of
+//! the limit at rest and less the faster the path goes round the curve. The top speed of a
+//! curved piece leaves √(1 − 0.99²) ≈ 14 % of it ([`CURVE_SHARE`]); the speed generator
+//! uses the grip of the speed it is at. Where only the sum form applies, the curvature term
+//! gets at most half of the acceleration limit at the top speed and the rest is a constant
+//! limit. For the jerk, c₃·V³ gets at most a quarter of the jerk limit and 3·c₂·V·A at most a
+//! quarter (0.6 in quadrature on arcs); J then takes what is left. On a line (c₂ = c₃ = 0)
+//! this is exactly the axis limits projected on the direction.
 
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, ZERO_LENGTH};
-use crate::profile::PathLimits;
 use klar_interp::AxisLetter;
 
-/// Share of an axis's acceleration limit the curvature term c₂·V² may take on an arc (the
-/// rest, √(1 − 0.8²) = 0.6 of the limit in quadrature, is left for changing speed).
-const ARC_CURVE_SHARE: f64 = 0.8;
+/// Share of the acceleration (in quadrature) the curvature term κ·V² may take at the top
+/// speed of a curved piece.
+pub const CURVE_SHARE: f64 = 0.99;
+
+/// The same for the curvature form (blends, splines: short pieces with a curvature bound
+/// rather than an exact curvature, where some acceleration must be left at the top speed
+/// for the speed changes between them).
+const BLEND_CURVE_SHARE: f64 = 0.8;
+
+/// Share of an axis's acceleration limit the curvature term may take where the terms add
+/// (no quadrature form applies).
+const SUM_CURVE_SHARE: f64 = 0.5;
 
 /// Share of an axis's jerk limit the term 3·c₂·V·A may take on an arc (0.8 of the limit is
 /// left in quadrature for the path jerk and c₃·V³).
 const ARC_JERK_SHARE: f64 = 0.6;
+
+/// The path acceleration a piece allows at each path speed:
+/// `A(v) = min(flat, √(peak² − (bend·v²)²))`. `bend` is 0 where the acceleration does not
+/// depend on the speed (lines, or limits evaluated at the top speed).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Grip {
+    /// Limit at every speed.
+    pub flat: f64,
+    /// Limit at rest of the speed-dependent part.
+    pub peak: f64,
+    /// Curvature factor of the speed-dependent part (1/mm).
+    pub bend: f64,
+}
+
+impl Grip {
+    /// The same acceleration at every speed.
+    pub fn constant(a: f64) -> Grip {
+        Grip {
+            flat: a,
+            peak: a,
+            bend: 0.0,
+        }
+    }
+
+    /// The acceleration at speed `v` (never negative).
+    pub fn at(&self, v: f64) -> f64 {
+        if self.bend <= 0.0 {
+            return self.flat.min(self.peak);
+        }
+        let k = self.bend * v * v;
+        self.flat
+            .min((self.peak * self.peak - k * k).max(0.0).sqrt())
+    }
+
+    /// The largest acceleration at any speed.
+    pub fn most(&self) -> f64 {
+        self.flat.min(self.peak)
+    }
+
+    /// A grip no larger than either at any speed.
+    pub fn min(self, other: Grip) -> Grip {
+        Grip {
+            flat: self.flat.min(other.flat),
+            peak: self.peak.min(other.peak),
+            bend: self.bend.max(other.bend),
+        }
+    }
+
+    /// True when `other` allows less than `self` at some speed.
+    pub fn undercut_by(&self, other: &Grip) -> bool {
+        other.flat < self.flat || other.peak < self.peak || other.bend > self.bend
+    }
+
+    /// The grip scaled by `share` at every speed.
+    pub fn scaled(self, share: f64) -> Grip {
+        Grip {
+            flat: self.flat * share,
+            peak: self.peak * share,
+            bend: self.bend * share,
+        }
+    }
+
+    /// The speed at which the speed-dependent part has `share` of its peak left (in
+    /// quadrature: `bend·v² = √(1 − share²)·peak`); `None` where it never binds below the
+    /// flat limit or does not depend on the speed.
+    pub fn knee(&self, share: f64) -> Option<f64> {
+        if self.bend <= 0.0 || share * self.peak >= self.flat {
+            return None;
+        }
+        Some(((1.0 - share * share).max(0.0).sqrt() * self.peak / self.bend).sqrt())
+    }
+}
+
+/// Path limits of one piece.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PieceLimits {
+    /// Largest path speed.
+    pub velocity: f64,
+    /// Largest path acceleration (at low speed: see `grip`).
+    pub acceleration: f64,
+    /// Largest path jerk.
+    pub jerk: f64,
+    /// Path acceleration by speed.
+    pub grip: Grip,
+}
 
 /// A moving axis: its limits, the bounds c₁, c₂, c₃, the turning part W of c₁ (arcs) and
 /// the curvature bound κ that applies to it (linear axes of a linear move, else 0).
@@ -57,6 +154,24 @@ struct Moving {
     c3: f64,
     wave: f64,
     kappa: f64,
+}
+
+impl Moving {
+    /// The quadrature forms of this axis as grips (peak, bend): the arc form with the end
+    /// correction folded in (`√((W·A)² + X²) + o·A ≤ a_max` holds for `A = √(ã² − X²)/c₁`
+    /// with `ã = a_max·W/c₁`: o·A ≤ o·a_max/c₁ and W ≤ c₁), and the curvature form.
+    fn curves(&self) -> [Option<(f64, f64, f64)>; 2] {
+        let a = self.l.max_acceleration;
+        let wave = (self.wave > 0.0 && self.c1 > 0.0).then(|| {
+            (
+                a * self.wave / self.c1 / self.c1,
+                self.c2 / self.c1,
+                CURVE_SHARE,
+            )
+        });
+        let kappa = (self.kappa > 0.0).then_some((a, self.kappa, BLEND_CURVE_SHARE));
+        [wave, kappa]
+    }
 }
 
 /// Why no path limits exist for a segment.
@@ -73,7 +188,7 @@ pub fn path_limits(
     length: f64,
     limits: &[Option<AxisLimits>; 9],
     feed: Option<f64>,
-) -> Result<PathLimits, LimitError> {
+) -> Result<PieceLimits, LimitError> {
     let mut moving: [Option<Moving>; 9] = [None; 9];
     for (i, axis) in AxisLetter::ALL.into_iter().enumerate() {
         let (c1, c2, c3) = (bounds.d1[i], bounds.d2[i], bounds.d3[i]);
@@ -108,13 +223,9 @@ pub fn path_limits(
             v = v.min(l.max_velocity / m.c1);
         }
         if m.c2 > 0.0 {
-            let mut top = if m.wave > 0.0 {
-                (ARC_CURVE_SHARE * l.max_acceleration / m.c2).sqrt()
-            } else {
-                (0.5 * l.max_acceleration / m.c2).sqrt()
-            };
-            if m.kappa > 0.0 {
-                top = top.max((ARC_CURVE_SHARE * l.max_acceleration / m.kappa).sqrt());
+            let mut top = (SUM_CURVE_SHARE * l.max_acceleration / m.c2).sqrt();
+            for (peak, bend, share) in m.curves().into_iter().flatten() {
+                top = top.max((share * peak / bend).sqrt());
             }
             v = v.min(top);
         }
@@ -122,32 +233,40 @@ pub fn path_limits(
             v = v.min((0.25 * l.max_jerk / m.c3).cbrt());
         }
     }
-    let mut a = f64::INFINITY;
+    let mut grip = Grip {
+        flat: f64::INFINITY,
+        peak: f64::INFINITY,
+        bend: 0.0,
+    };
     for m in axes() {
         let (l, c1, c2, w) = (m.l, m.c1, m.c2, m.wave);
+        // The sum form at the top speed, a constant limit.
         let curve = c2 * v * v;
-        // Any curve in arc length: √(A² + (κ·V²)²) ≤ a_max on a linear axis.
-        let quad = if m.kappa > 0.0 {
-            let k = m.kappa * v * v;
-            (l.max_acceleration * l.max_acceleration - k * k)
-                .max(0.0)
-                .sqrt()
+        let sum = if c1 > 0.0 {
+            (l.max_acceleration - curve) / c1
+        } else if curve <= l.max_acceleration {
+            f64::INFINITY
         } else {
             0.0
         };
-        let mut ai = if w > 0.0 {
-            // √((W·A)² + X²) + o·A ≤ a_max holds for A = √(ã² − X²)/c₁ with
-            // ã = a_max·(1 − o/c₁): o·A ≤ o·a_max/c₁ and W ≤ c₁.
-            let am = l.max_acceleration * (1.0 - (c1 - w) / c1);
-            ((am * am - curve * curve).max(0.0).sqrt() / c1).max(quad)
-        } else if c1 > 0.0 {
-            ((l.max_acceleration - curve) / c1).max(quad)
-        } else {
-            quad.max(if curve <= l.max_acceleration {
-                f64::INFINITY
-            } else {
-                0.0
+        // The quadrature form that allows most at the top speed, if it beats the sum.
+        let best = m
+            .curves()
+            .into_iter()
+            .flatten()
+            .map(|(peak, bend, _)| {
+                let k = bend * v * v;
+                ((peak * peak - k * k).max(0.0).sqrt(), peak, bend)
             })
+            .max_by(|x, y| x.0.total_cmp(&y.0))
+            .filter(|q| q.0 >= sum);
+        let mut axis = match best {
+            Some((_, peak, bend)) => Grip {
+                flat: f64::INFINITY,
+                peak,
+                bend,
+            },
+            None => Grip::constant(sum),
         };
         if c2 > 0.0 && v > 0.0 {
             let share = if w > 0.0 {
@@ -155,28 +274,102 @@ pub fn path_limits(
             } else {
                 1.0 / 12.0
             };
-            ai = ai.min(share * l.max_jerk / (c2 * v));
+            axis.flat = axis.flat.min(share * l.max_jerk / (c2 * v));
         }
-        a = a.min(ai);
+        grip = grip.min(axis);
     }
+    // The cross term 3·c₂·v·A is largest at the top speed with the largest acceleration.
+    let a = grip.most();
     let mut j = f64::INFINITY;
     for m in axes() {
         let (l, c1, c2, c3, w) = (m.l, m.c1, m.c2, m.c3, m.wave);
         if c1 <= 0.0 {
             continue;
         }
+        let cross = 3.0 * c2 * v * a;
         if w > 0.0 {
             // The same construction as for the acceleration.
             let jm = l.max_jerk * (1.0 - (c1 - w) / c1);
-            let cross = 3.0 * c2 * v * a;
             j = j.min(((jm * jm - cross * cross).max(0.0).sqrt() - c3 * v.powi(3)) / c1);
         } else {
-            j = j.min((l.max_jerk - 3.0 * c2 * v * a - c3 * v.powi(3)) / c1);
+            j = j.min((l.max_jerk - cross - c3 * v.powi(3)) / c1);
         }
     }
-    Ok(PathLimits {
+    Ok(PieceLimits {
         velocity: v,
         acceleration: a,
         jerk: j,
+        grip,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geom::{Arc, Segment};
+    use klar_interp::{Plane, Pose};
+
+    fn xyz(v: f64, a: f64, j: f64) -> [Option<AxisLimits>; 9] {
+        let l = AxisLimits {
+            max_velocity: v,
+            max_acceleration: a,
+            max_jerk: j,
+        };
+        [
+            Some(l),
+            Some(l),
+            Some(l),
+            None,
+            None,
+            None,
+            None,
+            None,
+            None,
+        ]
+    }
+
+    #[test]
+    fn a_full_circle_leaves_the_acceleration_the_curvature_does_not_take() {
+        // Circle r = 5 in XY: per axis √(A² + (v²/r)²) ≤ a, so A(v) = √(a² − (v²/r)²).
+        let from = Pose::xyz(0.0, 0.0, 0.0);
+        let arc = Arc::new(from, from, [5.0, 0.0], Plane::XY, 360.0)
+            .ok()
+            .flatten()
+            .map(Segment::Arc);
+        let Some(arc) = arc else {
+            panic!("a full circle is an arc")
+        };
+        let l = path_limits(&arc.bounds(), arc.length(), &xyz(500.0, 1000.0, 1e9), None);
+        let Ok(l) = l else { panic!("limits") };
+        for v in [0.0f64, 20.0, 50.0, 65.0] {
+            let want = (1000.0f64.powi(2) - (v * v / 5.0).powi(2)).sqrt();
+            assert!((l.grip.at(v) - want).abs() <= 1e-6 * want, "{v}");
+        }
+        // The top speed leaves √(1 − 0.99²) of the limit.
+        let top = (CURVE_SHARE * 1000.0 * 5.0f64).sqrt();
+        assert!((l.velocity - top).abs() < 1e-9, "{}", l.velocity);
+    }
+
+    #[test]
+    fn grips_combine_below_both_and_knees_sit_where_the_share_is_left() {
+        let g = Grip {
+            flat: 900.0,
+            peak: 1000.0,
+            bend: 0.1,
+        };
+        assert_eq!(g.at(0.0), 900.0);
+        assert_eq!(g.at(200.0), 0.0);
+        // Half of the peak left where (0.1·v²)² = 1000² · (1 − 0.25).
+        let Some(u) = g.knee(0.5) else {
+            panic!("the knee lies below the flat limit")
+        };
+        assert!((g.at(u) - 500.0).abs() < 1e-9);
+        assert_eq!(g.knee(0.95), None);
+        let h = Grip::constant(700.0);
+        let m = g.min(h);
+        for v in [0.0, 30.0, 60.0, 90.0, 99.0] {
+            assert!(m.at(v) <= g.at(v).min(h.at(v)) + 1e-12);
+        }
+        assert!(g.undercut_by(&m) && h.undercut_by(&m) && !m.undercut_by(&g));
+    }
 }

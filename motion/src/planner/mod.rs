@@ -513,7 +513,7 @@ impl Planner {
                 start: self.committed_end,
                 vmax: l.velocity,
                 feed,
-                accel: l.acceleration,
+                grip: l.grip,
                 jerk,
                 loc,
             });

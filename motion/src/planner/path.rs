@@ -22,8 +22,7 @@
 use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
 use crate::geom::{Metric, PathPoint, Segment};
-use crate::limits::{LimitError, path_limits};
-use crate::profile::PathLimits;
+use crate::limits::{Grip, LimitError, PieceLimits, path_limits};
 use klar_interp::SourceLoc;
 
 /// Largest feed override, as a factor: path limits are prepared for it.
@@ -92,8 +91,8 @@ pub struct Piece {
     pub vmax: f64,
     /// Programmed feed (`None`: rapid).
     pub feed: Option<f64>,
-    /// Path acceleration limit.
-    pub accel: f64,
+    /// Path acceleration limit by path speed.
+    pub grip: Grip,
     /// Path jerk limit.
     pub jerk: f64,
     /// The block it comes from.
@@ -210,7 +209,7 @@ pub fn piece_limits(
     length: f64,
     feed: Option<f64>,
     limits: &[Option<AxisLimits>; 9],
-) -> Result<PathLimits, PieceError> {
+) -> Result<PieceLimits, PieceError> {
     let bounds = match shape {
         Shape::Element(g) => g.bounds(),
         Shape::Blend(q) => q.bounds(),

@@ -1,9 +1,9 @@
 //! The look-ahead window: which piece the path state moves on, where it must stop next, and
 //! the speed limits ahead that can matter within the braking distance ([`speed::Window`]).
 
-use super::speed::{self, Limit};
+use super::speed::{self, Limit, Motion};
 use super::{Marker, Planner};
-use crate::profile::Ramp;
+use crate::limits::Grip;
 
 /// Largest distance (mm) over which a limit may join the one before it.
 const MERGE_DISTANCE: f64 = 0.5;
@@ -46,19 +46,26 @@ impl Planner {
         let vh = self.state.v.max(current);
         let (v0, a0, period) = (vh, self.state.a.max(0.0), self.config.period);
         // Braking distance with the lowest limits seen so far, doubled.
-        let reach_for = |accel: f64, jerk: f64| {
-            2.0 * Ramp::new(v0, a0, 0.0, accel, jerk).distance() + 2.0 * v0 * period + 1e-9
+        let from = Motion {
+            s: 0.0,
+            v: v0,
+            a: a0,
         };
-        let mut range = reach_for(self.accel_floor, self.jerk_floor);
+        let reach_for = |grip: &Grip, jerk: f64| {
+            2.0 * speed::brake_distance(&from, 0.0, grip, jerk) + 2.0 * v0 * period + 1e-9
+        };
+        let floor = Grip::constant(self.accel_floor);
+        let mut range = reach_for(&floor, self.jerk_floor);
         let w = &mut self.window;
         w.limits.clear();
         // Acceleration and jerk for the next period: those of the current piece (the
         // limits ahead make the state arrive at each piece within its acceleration limit;
         // neighbouring pieces share the lower jerk limit, see `commit_front`).
-        w.accel = f64::INFINITY;
+        let none = Grip::constant(f64::INFINITY);
+        w.grip = none;
         w.jerk = f64::INFINITY;
-        let (mut pre_accel, mut pre_jerk) = (f64::INFINITY, f64::INFINITY);
-        let (mut low_speed, mut low_accel) = (f64::INFINITY, f64::INFINITY);
+        let (mut pre_grip, mut pre_jerk) = (none, f64::INFINITY);
+        let (mut low_speed, mut low_grip) = (f64::INFINITY, none);
         let mut low_jerk = f64::INFINITY;
         // Path distance the next period can reach: a piece starting within it shares its
         // jerk limit with the current one for that period.
@@ -71,11 +78,11 @@ impl Planner {
                 break;
             }
             if k == 0 {
-                w.accel = p.accel;
+                w.grip = p.grip;
                 w.jerk = p.jerk;
-                pre_accel = p.accel;
+                pre_grip = p.grip;
                 pre_jerk = p.jerk;
-                range = range.max(reach_for(pre_accel, pre_jerk));
+                range = range.max(reach_for(&pre_grip, pre_jerk));
             } else if p.start <= next_reach {
                 w.jerk = w.jerk.min(p.jerk);
             }
@@ -86,9 +93,11 @@ impl Planner {
             // `commit_front`). Meeting the lowest one ahead prepares for all higher ones.
             let jerk_drops = p.jerk < low_jerk;
             low_jerk = low_jerk.min(p.jerk);
-            if limit < low_speed || p.accel < low_accel || (k > 0 && jerk_drops) {
+            // Likewise a grip below the lowest before it at some speed; the limit keeps the
+            // lowest grip so far, which every piece up to the next limit allows.
+            if limit < low_speed || low_grip.undercut_by(&p.grip) || (k > 0 && jerk_drops) {
                 low_speed = low_speed.min(limit);
-                low_accel = low_accel.min(p.accel);
+                low_grip = low_grip.min(p.grip);
                 match w.limits.last_mut() {
                     // A limit barely below one just before it (dense code, where the speed
                     // limits of the blends drift down piece by piece) joins that one: its
@@ -100,9 +109,9 @@ impl Planner {
                             && limit >= last.speed * (1.0 - MERGE_SHARE) =>
                     {
                         last.speed = last.speed.min(limit);
-                        last.accel_after = last.accel_after.min(p.accel);
+                        last.grip_after = low_grip;
                         last.jerk = last.jerk.min(p.jerk);
-                        pre_accel = pre_accel.min(p.accel);
+                        pre_grip = pre_grip.min(p.grip);
                         pre_jerk = pre_jerk.min(p.jerk);
                     }
                     _ => {
@@ -111,37 +120,37 @@ impl Planner {
                         w.limits.push(Limit {
                             at: p.start,
                             speed: limit,
-                            accel_after: p.accel,
-                            accel: pre_accel,
+                            grip_after: low_grip,
+                            grip: pre_grip,
                             jerk: pre_jerk.min(p.jerk),
                         });
                         // Limits further on are checked from this one (see `speed::settle`).
-                        pre_accel = p.accel;
+                        pre_grip = p.grip;
                         pre_jerk = p.jerk;
                     }
                 }
             }
-            if p.accel < pre_accel || p.jerk < pre_jerk {
-                pre_accel = pre_accel.min(p.accel);
+            if pre_grip.undercut_by(&p.grip) || p.jerk < pre_jerk {
+                pre_grip = pre_grip.min(p.grip);
                 pre_jerk = pre_jerk.min(p.jerk);
-                range = range.max(reach_for(pre_accel, pre_jerk));
+                range = range.max(reach_for(&pre_grip, pre_jerk));
             }
         }
         self.range = range;
-        if !w.accel.is_finite() {
-            w.accel = self.accel_floor;
+        if !w.grip.most().is_finite() {
+            w.grip = floor;
             w.jerk = self.jerk_floor;
         }
-        if !pre_accel.is_finite() {
-            pre_accel = w.accel;
+        if !pre_grip.most().is_finite() {
+            pre_grip = w.grip;
             pre_jerk = w.jerk;
         }
         if stop - s <= range {
             w.limits.push(Limit {
                 at: stop,
                 speed: 0.0,
-                accel_after: f64::INFINITY,
-                accel: pre_accel,
+                grip_after: none,
+                grip: pre_grip,
                 jerk: pre_jerk,
             });
         }

@@ -27,7 +27,15 @@
 //! Each action has |jerk| ≤ J and |a| ≤ A, the window's smallest path limits, so the
 //! per-axis limits of every piece in the window hold. Positions are integrated exactly for
 //! piecewise constant jerk, so finite differences of the samples stay within the limits too.
+//!
+//! On curves the acceleration limit depends on the speed ([`Grip`]): it is all of the limit
+//! at rest and shrinks as the curvature term κ·v² takes its share. A ramp that never goes
+//! faster than `u` may use the grip at `u`, so every action uses the grip of the highest
+//! speed it reaches. Speeding up, the generator picks the ramp whose own top speed gives the
+//! most speed after the period. Braking, the checks let the ramp switch to the higher
+//! acceleration of lower speeds at fixed knees of the grip ([`brake_distance`]).
 
+use crate::limits::Grip;
 use crate::profile::Ramp;
 
 /// Path distance, speed and acceleration.
@@ -48,23 +56,33 @@ pub struct Limit {
     pub at: f64,
     /// The speed limit from there on (0 for a stop).
     pub speed: f64,
-    /// The acceleration limit from there on.
-    pub accel_after: f64,
-    /// The smallest acceleration limit between the current position and `at`.
-    pub accel: f64,
+    /// The acceleration limit by speed from there on.
+    pub grip_after: Grip,
+    /// The smallest acceleration limit by speed between the current position and `at`.
+    pub grip: Grip,
     /// The smallest jerk limit between the current position and `at`.
     pub jerk: f64,
 }
 
 /// What the generator needs to know about the path ahead.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub struct Window {
     /// Running minima of the limits ahead, in path order (the first is the current piece).
     pub limits: Vec<Limit>,
-    /// Acceleration limit for the next period.
-    pub accel: f64,
+    /// Acceleration limit by speed for the next period.
+    pub grip: Grip,
     /// Jerk limit for the next period.
     pub jerk: f64,
+}
+
+impl Default for Window {
+    fn default() -> Self {
+        Window {
+            limits: Vec::new(),
+            grip: Grip::constant(f64::INFINITY),
+            jerk: f64::INFINITY,
+        }
+    }
 }
 
 impl Window {
@@ -93,6 +111,52 @@ const SPEED_SLACK: f64 = 1e-9;
 /// Distance slack when comparing braking distances (rounding), mm.
 const DISTANCE_SLACK: f64 = 1e-12;
 
+/// Shares of the grip's peak at which a braking ramp switches to the higher acceleration
+/// of lower speeds (see [`brake_distance`]), highest speed first.
+const KNEE_SHARES: [f64; 2] = [0.35, 0.7];
+
+/// Relative change of the grip over a speed range below which it counts as constant.
+const GRIP_CHANGE: f64 = 0.02;
+
+/// Golden-section steps for the ramp's top speed when speeding up on a curve.
+const TOP_STEPS: usize = 14;
+
+/// The highest speed `x` reaches when its acceleration is brought to zero at once.
+pub fn peak_speed(x: &Motion, jerk: f64) -> f64 {
+    let a = x.a.max(0.0);
+    x.v + a * a / (2.0 * jerk)
+}
+
+/// Distance the path needs from `x` to slow down to `target` (ending with zero
+/// acceleration) with the acceleration `grip` allows and jerk `jerk`: the shorter of one
+/// ramp with the grip of the highest speed, and a chain of ramps that switches to the grip
+/// of each knee ([`KNEE_SHARES`]) once the speed is below it. Each ramp of the chain ends at
+/// its knee with zero acceleration, so the chain is a motion the actions can follow.
+/// Infinite when the grip leaves no acceleration at the start.
+pub fn brake_distance(x: &Motion, target: f64, grip: &Grip, jerk: f64) -> f64 {
+    let top = peak_speed(x, jerk);
+    let first = grip.at(top);
+    if first <= 0.0 {
+        return f64::INFINITY;
+    }
+    let single = Ramp::new(x.v, x.a, target, first, jerk).distance();
+    let mut knees = KNEE_SHARES
+        .iter()
+        .filter_map(|&f| grip.knee(f))
+        .filter(|&u| u > target && u < x.v.min(top));
+    let Some(knee) = knees.next() else {
+        return single;
+    };
+    let mut chain = Ramp::new(x.v, x.a, knee, first, jerk).distance();
+    let mut from = knee;
+    for u in knees {
+        chain += Ramp::new(from, 0.0, u, grip.at(from), jerk).distance();
+        from = u;
+    }
+    chain += Ramp::new(from, 0.0, target, grip.at(from), jerk).distance();
+    single.min(chain)
+}
+
 /// Distance travelled while |a| is brought down to `limit` with jerk `jerk`.
 fn easing_distance(x: &Motion, limit: f64, jerk: f64) -> f64 {
     let t = (x.a.abs() - limit).max(0.0) / jerk;
@@ -115,18 +179,30 @@ fn misses(x: &Motion, l: &Limit) -> (f64, f64) {
     let too_fast = if slowing {
         // A stop is judged with the full limits: the path arrives there exactly.
         let share = if l.speed > 0.0 { JUDGE } else { 1.0 };
-        ratio(Ramp::new(x.v, x.a, l.speed, l.accel * share, l.jerk * share).distance())
+        ratio(brake_distance(
+            x,
+            l.speed,
+            &l.grip.scaled(share),
+            l.jerk * share,
+        ))
     } else {
         0.0
     };
     // While the speed must still come down to the limit, its ramp (ending with zero
     // acceleration there) meets the acceleration limit too.
-    let too_hard = if !slowing && x.a.abs() > l.accel_after * (1.0 + SPEED_SLACK) {
-        ratio(easing_distance(x, l.accel_after, l.jerk))
+    let after = arrival_accel(x, l);
+    let too_hard = if !slowing && x.a.abs() > after * (1.0 + SPEED_SLACK) {
+        ratio(easing_distance(x, after, l.jerk))
     } else {
         0.0
     };
     (too_fast, too_hard)
+}
+
+/// The acceleration limit `x` must be within when it reaches limit `l` without slowing
+/// down for it: the grip after the limit at the highest speed `x` can arrive with.
+fn arrival_accel(x: &Motion, l: &Limit) -> f64 {
+    l.grip_after.at(x.v.max(peak_speed(x, l.jerk)))
 }
 
 /// Makes the limits consistent backwards (the backward pass of the look-ahead): each limit's
@@ -138,15 +214,29 @@ pub fn settle(limits: &mut [Limit]) {
     for k in (0..limits.len().saturating_sub(1)).rev() {
         let (here, next) = (limits[k], limits[k + 1]);
         let room = (next.at - here.at).max(0.0);
-        let brake = |v: f64| {
-            Ramp::new(v, 0.0, next.speed, next.accel * JUDGE, next.jerk * JUDGE).distance()
-        };
+        let (grip, jerk) = (next.grip.scaled(JUDGE), next.jerk * JUDGE);
+        let brake = |v: f64| brake_distance(&Motion { s: 0.0, v, a: 0.0 }, next.speed, &grip, jerk);
         if here.speed <= next.speed || brake(here.speed) <= room {
             continue;
         }
-        let fast = braking_speed(next.speed, room, next.accel * JUDGE, next.jerk * JUDGE);
+        // With the grip of the highest speed the closed form is on the safe side.
+        let fast = braking_speed(next.speed, room, grip.at(here.speed), jerk);
         let (mut lo, mut hi) = (next.speed, fast.min(here.speed));
-        if brake(hi) > room {
+        let varies = grip.at(next.speed) > grip.at(here.speed) * (1.0 + GRIP_CHANGE);
+        if varies && brake(hi) <= room {
+            // The grip grows as the speed falls: find the highest speed by bisection.
+            lo = hi;
+            hi = here.speed;
+            for _ in 0..30 {
+                let mid = 0.5 * (lo + hi);
+                if brake(mid) <= room {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            hi = lo;
+        } else if brake(hi) > room {
             // Rounding put the closed form a hair too high: settle it by bisection.
             for _ in 0..40 {
                 let mid = 0.5 * (lo + hi);
@@ -241,9 +331,11 @@ fn bindings(x: &Motion, w: &Window) -> Vec<Action> {
         // missed. Easing the acceleration uses the current piece's jerk (at least the
         // limit's), which eases no later than the check assumes.
         let ramp = if too_fast > 0.0 {
-            (l.speed, l.accel.min(w.accel), l.jerk.min(w.jerk))
+            let jerk = l.jerk.min(w.jerk);
+            (l.speed, l.grip.min(w.grip).at(peak_speed(x, jerk)), jerk)
         } else {
-            (l.speed.min(x.v), l.accel_after.min(w.accel), w.jerk)
+            let accel = arrival_accel(x, l).min(w.grip.at(peak_speed(x, w.jerk)));
+            (l.speed.min(x.v), accel, w.jerk)
         };
         found.push((ramp, urgency));
     }
@@ -261,9 +353,46 @@ fn ramp_step(x: &Motion, target: f64, accel: f64, jerk: f64, dt: f64) -> Motion 
     }
 }
 
+/// The ramp towards `target` that gains most speed within the period `dt`. Where the grip
+/// shrinks between the speed `x` reaches anyway and the target, a ramp that stops at a
+/// lower speed may use more acceleration: its top speed is chosen by golden section.
+fn go_step(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
+    let top = peak_speed(x, w.jerk);
+    let toward = |u: f64| ramp_step(x, u, w.grip.at(u.max(top)), w.jerk, dt);
+    let plain = toward(target);
+    if target <= top || w.grip.at(top) <= w.grip.at(target) * (1.0 + GRIP_CHANGE) {
+        return plain;
+    }
+    let gain = |m: &Motion| m.v + 1e-6 * m.s;
+    let ratio = 0.5 * (5f64.sqrt() - 1.0);
+    let (mut lo, mut hi) = (top, target);
+    let mut c = hi - ratio * (hi - lo);
+    let mut d = lo + ratio * (hi - lo);
+    let (mut fc, mut fd) = (toward(c), toward(d));
+    for _ in 0..TOP_STEPS {
+        if gain(&fc) >= gain(&fd) {
+            hi = d;
+            d = c;
+            fd = fc;
+            c = hi - ratio * (hi - lo);
+            fc = toward(c);
+        } else {
+            lo = c;
+            c = d;
+            fc = fd;
+            d = lo + ratio * (hi - lo);
+            fd = toward(d);
+        }
+    }
+    [plain, fc, fd]
+        .into_iter()
+        .max_by(|a, b| gain(a).total_cmp(&gain(b)))
+        .unwrap_or(plain)
+}
+
 /// The state one period `dt` on, heading for `target` speed.
 pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
-    let go = ramp_step(x, target, w.accel, w.jerk, dt);
+    let go = go_step(x, target, w, dt);
     if check(&go, w) {
         return go;
     }
@@ -273,7 +402,8 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     // ramp rides the braking curve in front of the binding limit.
     let mut candidates = bindings(x, w);
     candidates.extend(bindings(&go, w));
-    candidates.push((0.0, w.accel, w.easing_jerk(x.s)));
+    let easing = w.easing_jerk(x.s);
+    candidates.push((0.0, w.grip.at(peak_speed(x, easing)), easing));
     let mut fallback = None;
     for &(low, accel, jerk) in &candidates {
         let low = low.min(target).max(0.0);
@@ -286,7 +416,9 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         let mut best = brake;
         for _ in 0..BISECTION_STEPS {
             let mid = 0.5 * (lo + hi);
-            let trial = ramp_step(x, mid, accel, jerk, dt);
+            // Above the speed the state reaches anyway the grip of `mid` applies.
+            let grip = w.grip.at(mid.max(peak_speed(x, jerk)));
+            let trial = ramp_step(x, mid, accel.min(grip), jerk, dt);
             if check(&trial, w) {
                 lo = mid;
                 best = trial;
