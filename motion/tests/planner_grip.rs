@@ -107,3 +107,44 @@ fn small_corner_arcs_keep_every_axis_within_its_limits() {
         assert_eq!(out.samples.last().map(|s| s.pose), Some(p(-9.0, 20.0)));
     }
 }
+
+/// Largest distance of the samples from a line along X (y = 0, x ≤ 9) running into a
+/// quarter arc round (9, 1) of radius 1 and on up the line x = 10.
+fn largest_deviation(jerk: f64) -> f64 {
+    let cfg = config(limits_xyz(100.0, A, jerk));
+    let p = |x: f64, y: f64| Pose::xyz(x, y, 0.0);
+    let f = Feed::Rate(100.0);
+    let ops = vec![
+        line(1, p(0.0, 0.0), p(9.0, 0.0), f),
+        arc(2, p(9.0, 0.0), p(10.0, 1.0), [9.0, 1.0], Plane::XY, 90.0, f),
+        line(3, p(10.0, 1.0), p(10.0, 10.0), f),
+    ];
+    let out = run(cfg.clone(), p(0.0, 0.0), ops);
+    assert_within_limits(&cfg, &p(0.0, 0.0), &out.samples, 1.01);
+    out.samples
+        .iter()
+        .map(|s| {
+            let (x, y) = (s.pose.0[0], s.pose.0[1]);
+            if x <= 9.0 {
+                y.abs()
+            } else if y <= 1.0 {
+                ((x - 9.0).hypot(y - 1.0) - 1.0).abs()
+            } else {
+                (x - 10.0).abs()
+            }
+        })
+        .fold(0.0, f64::max)
+}
+
+#[test]
+fn a_line_running_into_an_arc_is_blended_only_where_the_jerk_needs_it() {
+    // At 31.6 mm/s the curvature jump 1/mm steps the acceleration by 1000 mm/s²: within a
+    // period that is 1e6 mm/s³, far below a jerk limit of 1e9 but ten times one of 1e5.
+    let exact = largest_deviation(1e9);
+    assert!(exact < 1e-9, "unblended joint left the contour by {exact}");
+    let blended = largest_deviation(1e5);
+    assert!(
+        blended > 1e-6 && blended <= 0.01,
+        "blend deviation {blended}"
+    );
+}

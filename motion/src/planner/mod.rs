@@ -484,7 +484,13 @@ impl Planner {
             let next = rest.next().map(|w| &mut w.element);
             let after = rest.next().map(|w| &w.element);
             let after = if flushing { None } else { after };
-            commit(&mut front.element, next, after, &self.config.limits)
+            commit(
+                &mut front.element,
+                next,
+                after,
+                &self.config.limits,
+                self.config.period,
+            )
         };
         if done.stop_first {
             self.add_stop(self.committed_end);

@@ -7,6 +7,11 @@
 //!
 //! Corner rules, for two consecutive elements without a stop between them:
 //! * already curvature-continuous (same tangent, same curvature vector): no blend;
+//! * the same tangent with a jump in curvature (a line running into an arc): no blend
+//!   where the step in each axis's acceleration the jump causes at the highest speed either
+//!   element allows, v²·|Δq″ᵢ|, stays within [`STEP_SHARE`] of the axis's jerk limit times
+//!   the servo period (between two samples that is a jerk far inside the limit: machines
+//!   whose jerk is effectively unlimited); otherwise a blend as at any corner;
 //! * tolerance 0, rotary-only moves, a turn sharper than 120°, or no blend found: exact
 //!   stop at the corner;
 //! * otherwise a [`Quintic`] blend whose distance from the programmed contour is checked
@@ -39,6 +44,10 @@ const MAX_BLEND_ANGLE: f64 = 2.1;
 /// Tangent and curvature differences below which two elements already join smoothly.
 const SMOOTH_TANGENT: f64 = 1e-9;
 const SMOOTH_CURVATURE: f64 = 1e-7;
+
+/// Share of an axis's jerk limit times the servo period that the acceleration step of a
+/// curvature jump may take at a tangent joint left without a blend.
+pub const STEP_SHARE: f64 = 0.005;
 
 /// Attempts at shrinking a blend before giving up.
 const BLEND_ATTEMPTS: usize = 24;
@@ -234,6 +243,32 @@ fn angle(a: &[f64; 9], b: &[f64; 9]) -> f64 {
     c.clamp(-1.0, 1.0).acos()
 }
 
+/// True when the curvature jump between `cur` and `next` at a tangent joint (their
+/// curvature vectors `d2`) steps each axis's acceleration by at most [`STEP_SHARE`] of its
+/// jerk limit times `period`, at the highest speed either element allows there.
+fn jump_fits(
+    cur: &Element,
+    next: &Element,
+    d2: (&[f64; 9], &[f64; 9]),
+    limits: &[Option<AxisLimits>; 9],
+    period: f64,
+) -> bool {
+    let top = |e: &Element| {
+        let shape = Shape::Element(e.segment.clone());
+        piece_limits(&shape, e.segment.length(), e.feed, limits)
+            .ok()
+            .map(|l| l.velocity)
+    };
+    let (Some(a), Some(b)) = (top(cur), top(next)) else {
+        return false;
+    };
+    let v = a.min(b);
+    (0..9).all(|i| {
+        let step = (d2.0[i] - d2.1[i]).abs() * v * v;
+        step == 0.0 || limits[i].is_some_and(|l| step <= STEP_SHARE * l.max_jerk * period)
+    })
+}
+
 fn diff_norm(a: &[f64; 9], b: &[f64; 9]) -> f64 {
     a.iter()
         .zip(b)
@@ -251,6 +286,7 @@ pub fn commit(
     next: Option<&mut Element>,
     after: Option<&Element>,
     limits: &[Option<AxisLimits>; 9],
+    period: f64,
 ) -> Committed {
     let mut out = Committed::default();
     let len = cur.segment.length();
@@ -261,9 +297,11 @@ pub fn commit(
     };
     let end = cur.segment.point(len);
     let start = next.segment.point(0.0);
-    let smooth = cur.segment.metric() == next.segment.metric()
-        && diff_norm(&end.d1, &start.d1) <= SMOOTH_TANGENT
-        && diff_norm(&end.d2, &start.d2) <= SMOOTH_CURVATURE;
+    let tangent = cur.segment.metric() == next.segment.metric()
+        && diff_norm(&end.d1, &start.d1) <= SMOOTH_TANGENT;
+    let smooth = tangent
+        && (diff_norm(&end.d2, &start.d2) <= SMOOTH_CURVATURE
+            || jump_fits(cur, next, (&end.d2, &start.d2), limits, period));
     if smooth && cur.split.is_none() {
         push_part(&mut out, cur, cur.trim, len);
         return out;
