@@ -164,9 +164,44 @@ fn easing_distance(x: &Motion, limit: f64, jerk: f64) -> f64 {
     (x.v * t + 0.5 * x.a * t * t + j * t * t * t / 6.0).max(0.0)
 }
 
-/// How far limit `l` is missed from state `x`: the distance needed to meet it over the
-/// distance left (0 when it is met), for its speed and for its acceleration.
-fn misses(x: &Motion, l: &Limit) -> (f64, f64) {
+/// The jerk with which `x` may bring a positive acceleration down to zero on its way to
+/// limit `l` ahead: the window's jerk when that is higher than the limit's and the easing
+/// ends before the nearest limit ahead (where the jerk may drop: a piece with a lower jerk
+/// than the current one is always a limit). `None` when the limit's own jerk applies.
+///
+/// A ramp that eased with the lower jerk of a limit far ahead would reach a speed above the
+/// current piece's limit first: the checks would then ask for a braking the current limit
+/// forbids, and no action would satisfy both.
+fn easing_for(x: &Motion, l: &Limit, w: &Window) -> Option<f64> {
+    if x.a <= 0.0 || l.at <= x.s || w.jerk <= l.jerk {
+        return None;
+    }
+    let nearest = w.limits.iter().find(|m| m.at > x.s).map_or(l.at, |m| m.at);
+    (x.s + easing_distance(x, 0.0, JUDGE * w.jerk) <= nearest).then_some(w.jerk)
+}
+
+/// Distance `x` needs to slow down to the speed of limit `l` ahead ([`brake_distance`] with
+/// `share` of its grip and jerk); where [`easing_for`] allows, a positive acceleration is
+/// first brought to zero with the window's jerk.
+fn brake_need(x: &Motion, l: &Limit, w: &Window, share: f64) -> f64 {
+    let (grip, jerk) = (l.grip.scaled(share), l.jerk * share);
+    let single = brake_distance(x, l.speed, &grip, jerk);
+    let Some(fast) = easing_for(x, l, w) else {
+        return single;
+    };
+    let fast = fast * share;
+    let ease = easing_distance(x, 0.0, fast);
+    let eased = Motion {
+        s: x.s + ease,
+        v: peak_speed(x, fast),
+        a: 0.0,
+    };
+    single.min(ease + brake_distance(&eased, l.speed, &grip, jerk))
+}
+
+/// How far limit `l` is missed from state `x` in window `w`: the distance needed to meet it
+/// over the distance left (0 when it is met), for its speed and for its acceleration.
+fn misses(x: &Motion, l: &Limit, w: &Window) -> (f64, f64) {
     let slack = (l.at - x.s).max(0.0);
     let ratio = |need: f64| {
         if need > slack + DISTANCE_SLACK {
@@ -179,12 +214,7 @@ fn misses(x: &Motion, l: &Limit) -> (f64, f64) {
     let too_fast = if slowing {
         // A stop is judged with the full limits: the path arrives there exactly.
         let share = if l.speed > 0.0 { JUDGE } else { 1.0 };
-        ratio(brake_distance(
-            x,
-            l.speed,
-            &l.grip.scaled(share),
-            l.jerk * share,
-        ))
+        ratio(brake_need(x, l, w, share))
     } else {
         0.0
     };
@@ -287,7 +317,7 @@ fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (&'a Limit
         if covered {
             return None;
         }
-        let (fast, hard) = misses(x, l);
+        let (fast, hard) = misses(x, l, w);
         let fast = if ahead { 0.0 } else { fast };
         if l.at > x.s && !ahead {
             ahead = true;
@@ -331,7 +361,7 @@ fn bindings(x: &Motion, w: &Window) -> Vec<Action> {
         // missed. Easing the acceleration uses the current piece's jerk (at least the
         // limit's), which eases no later than the check assumes.
         let ramp = if too_fast > 0.0 {
-            let jerk = l.jerk.min(w.jerk);
+            let jerk = easing_for(x, l, w).unwrap_or(l.jerk.min(w.jerk));
             (l.speed, l.grip.min(w.grip).at(peak_speed(x, jerk)), jerk)
         } else {
             let accel = arrival_accel(x, l).min(w.grip.at(peak_speed(x, w.jerk)));
