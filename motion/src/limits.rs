@@ -34,7 +34,7 @@
 //! curved piece leaves √(1 − 0.99²) ≈ 14 % of it ([`CURVE_SHARE`]); the speed generator
 //! uses the grip of the speed it is at. Where only the sum form applies, the curvature term
 //! gets at most half of the acceleration limit at the top speed and the rest is a constant
-//! limit. For the jerk, c₃·V³ gets at most a quarter of the jerk limit and 3·c₂·V·A at most a
+//! limit. For the jerk, c₃·V³ gets at most half of the jerk limit and 3·c₂·V·A at most a
 //! quarter (0.6 in quadrature on arcs); J then takes what is left. On a line (c₂ = c₃ = 0)
 //! this is exactly the axis limits projected on the direction.
 
@@ -54,6 +54,10 @@ const BLEND_CURVE_SHARE: f64 = 0.8;
 /// Share of an axis's acceleration limit the curvature term may take where the terms add
 /// (no quadrature form applies).
 const SUM_CURVE_SHARE: f64 = 0.5;
+
+/// Share of an axis's jerk limit the term c₃·V³ may take at the top speed of a piece (the
+/// jerk a curve causes at constant speed as its curvature turns or changes).
+const CURVE_JERK_SHARE: f64 = 0.5;
 
 /// Share of an axis's jerk limit the term 3·c₂·V·A may take on an arc (0.8 of the limit is
 /// left in quadrature for the path jerk and c₃·V³).
@@ -230,7 +234,7 @@ pub fn path_limits(
             v = v.min(top);
         }
         if m.c3 > 0.0 {
-            v = v.min((0.25 * l.max_jerk / m.c3).cbrt());
+            v = v.min((CURVE_JERK_SHARE * l.max_jerk / m.c3).cbrt());
         }
     }
     let mut grip = Grip {

@@ -148,3 +148,37 @@ fn a_line_running_into_an_arc_is_blended_only_where_the_jerk_needs_it() {
         "blend deviation {blended}"
     );
 }
+
+#[test]
+fn a_blend_is_planned_in_parts_so_the_path_slows_down_inside_it() {
+    // The blend from the line into the arc has zero curvature where it starts and the
+    // arc's where it ends. Planned in parts with limits of their own, the path enters it
+    // faster than it runs at its tightest part; with one limit for the whole blend it
+    // would have to be at that speed before the blend begins.
+    let cfg = config(limits_xyz(100.0, A, 1e5));
+    let p = |x: f64, y: f64| Pose::xyz(x, y, 0.0);
+    let f = Feed::Rate(100.0);
+    let ops = vec![
+        line(1, p(0.0, 0.0), p(9.0, 0.0), f),
+        arc(2, p(9.0, 0.0), p(10.0, 1.0), [9.0, 1.0], Plane::XY, 90.0, f),
+        line(3, p(10.0, 1.0), p(10.0, 10.0), f),
+    ];
+    let from = p(0.0, 0.0);
+    let out = run(cfg.clone(), from, ops);
+    assert_within_limits(&cfg, &from, &out.samples, 1.01);
+    let v = speeds(&from, &out);
+    // The first sample off the line y = 0 is just inside the blend.
+    let Some(k) = out.samples.iter().position(|s| s.pose.0[1].abs() > 1e-7) else {
+        panic!("the path never leaves the line")
+    };
+    let slowest = v
+        .iter()
+        .skip(k)
+        .take(200)
+        .fold(f64::INFINITY, |m, x| m.min(*x));
+    assert!(
+        v[k] > 1.05 * slowest,
+        "entering the blend at {} mm/s, slowest {slowest} mm/s",
+        v[k]
+    );
+}

@@ -16,11 +16,18 @@
 //! magnitude over the smallest g.
 //!
 //! Intervals are halved where such a bound exceeds [`BOUND_MARGIN`] times the largest exact
-//! value found at the interval ends so far, down to 1/128 of the curve; the result per axis
-//! is the larger of that margin times the exact values and the interval bounds. It is therefore never below the true maximum, and
-//! where the halving succeeds it is at most the margin times the true maximum. Smooth blends
-//! need no halving or a few; the finest intervals serve the narrow curvature peak of a blend
-//! through a sharp corner.
+//! value found at the interval ends so far, down to 1/128 of the range; the result per axis
+//! is the largest interval bound. Every point of the range lies in an interval whose
+//! enclosure holds it, so the result is never below the true maximum, and where the halving
+//! succeeds it is at most the margin times the true maximum. Smooth blends need no halving
+//! or a few; the finest intervals serve the narrow curvature peak of a blend through a
+//! sharp corner.
+//!
+//! The curvature over the linear axes gets a bound of its own the same way, from
+//! κ² = (|P″|²·g − h²) / g³: the per-axis peaks of q″ of a turning curve lie at different
+//! places, so the norm of their bounds can overstate the curvature by up to √2. The range
+//! may be part of the curve ([`super::Quintic::bounds_between`]): a blend is planned in
+//! parts, each with the bounds of its own stretch.
 
 use crate::geom::{AxisBounds, Metric};
 
@@ -98,12 +105,13 @@ impl Derivatives {
         self.axes.get(..self.count).unwrap_or(&[])
     }
 
-    /// Upper bounds of |q′|, |q″|, |q‴| per axis over u ∈ [a, b]; `None` when |P′|² cannot be
-    /// shown to stay above `min_speed²` there (or a value is not finite).
+    /// Upper bounds of |q′|, |q″|, |q‴| per axis over u ∈ [a, b], and of the curvature over
+    /// the linear axes; `None` when |P′|² cannot be shown to stay above `min_speed²` there
+    /// (or a value is not finite).
     ///
     /// The derivatives are re-expanded about the interval's midpoint first (u = c + t); the
     /// products are then formed in t and enclosed over |t| ≤ r.
-    fn interval(&self, a: f64, b: f64, min_speed: f64) -> Option<[[f64; 9]; 3]> {
+    fn interval(&self, a: f64, b: f64, min_speed: f64) -> Option<([[f64; 9]; 3], f64)> {
         let (c, r) = (0.5 * (a + b), 0.5 * (b - a));
         let mut x = [[0.0; 5]; 9];
         let mut y = [[0.0; 4]; 9];
@@ -113,17 +121,29 @@ impl Derivatives {
             y[i] = taylor(&self.y[i], c);
             z[i] = taylor(&self.z[i], c);
         }
-        let (mut g, mut h, mut m) = ([0.0; 9], [0.0; 8], [0.0; 7]);
+        let (mut g, mut h, mut m, mut yy) = ([0.0; 9], [0.0; 8], [0.0; 7], [0.0; 7]);
         for &i in Metric::Linear.axes() {
             if self.axes().contains(&i) {
                 mul_add(&x[i], &x[i], 1.0, &mut g);
                 mul_add(&x[i], &y[i], 1.0, &mut h);
-                mul_add(&y[i], &y[i], 1.0, &mut m);
+                mul_add(&y[i], &y[i], 1.0, &mut yy);
                 mul_add(&x[i], &z[i], 1.0, &mut m);
             }
         }
+        for (mk, yk) in m.iter_mut().zip(&yy) {
+            *mk += yk;
+        }
         let (g_lo, _) = enclose(&g, r);
         if !(g_lo > min_speed * min_speed && g_lo.is_finite()) {
+            return None;
+        }
+        // κ² = |q″|² = (|P″|²·g − h²) / g³ over the linear axes.
+        let mut k2 = [0.0; 15];
+        mul_add(&yy, &g, 1.0, &mut k2);
+        mul_add(&h, &h, -1.0, &mut k2);
+        let (_, k2_hi) = enclose(&k2, r);
+        let kappa = (k2_hi.max(0.0) * (1.0 + ROUNDING) / (g_lo * g_lo * g_lo)).sqrt();
+        if !kappa.is_finite() {
             return None;
         }
         // g², 3·h·g and 4h² − m·g.
@@ -151,7 +171,7 @@ impl Derivatives {
                 return None;
             }
         }
-        Some(u)
+        Some((u, kappa))
     }
 }
 
@@ -194,14 +214,19 @@ fn abs_max<const N: usize>(a: &[f64; N], r: f64) -> f64 {
     lo.abs().max(hi.abs())
 }
 
-/// The derivative bounds of the quintic with monomial coefficients `c` (see the module
-/// notes); `exact(u)` gives the exact derivatives at one parameter value. `None` when the
-/// parameter speed falls below `min_speed` at an evaluated point or cannot be shown to stay
-/// above it on an interval of the finest width (a cusp, or close to one).
+/// The derivative bounds over u ∈ `range` of the quintic with monomial coefficients `c`
+/// (see the module notes); `exact(u)` gives the exact derivatives at one parameter value.
+/// `None` when the parameter speed falls below `min_speed` at an evaluated point or cannot
+/// be shown to stay above it on an interval of the finest width (a cusp, or close to one).
+///
+/// The curvature bound is the smaller of the norm of the per-axis bounds of q″ and a bound
+/// of |q″| itself (the per-axis peaks of a turning curve lie at different places, so their
+/// norm can overstate the curvature by up to √2).
 pub(super) fn derivative_bounds(
     c: &[[f64; 6]; 9],
     moving: &[bool; 9],
     min_speed: f64,
+    range: (f64, f64),
     exact: impl Fn(f64) -> Exact,
 ) -> Option<AxisBounds> {
     let num = Derivatives::new(c, moving);
@@ -209,7 +234,8 @@ pub(super) fn derivative_bounds(
     // Largest exact values found so far, and the largest interval bounds kept.
     let mut found = [[0.0f64; 9]; 3];
     let mut upper = [[0.0f64; 9]; 3];
-    let visit = |u: f64, found: &mut [[f64; 9]; 3]| -> Option<()> {
+    let (mut found_kappa, mut upper_kappa) = (0.0f64, 0.0f64);
+    let visit = |u: f64, found: &mut [[f64; 9]; 3], found_kappa: &mut f64| -> Option<()> {
         let e = exact(u);
         if e.sigma.is_nan() || e.sigma < min_speed {
             return None;
@@ -219,39 +245,46 @@ pub(super) fn derivative_bounds(
                 f[i] = f[i].max(t[i].abs());
             }
         }
+        *found_kappa = found_kappa.max(Metric::Linear.norm(&e.t[1]));
         Some(())
     };
-    visit(0.0, &mut found)?;
-    visit(1.0, &mut found)?;
+    let (lo, hi) = range;
+    if !(0.0..=1.0).contains(&lo) || !(lo..=1.0).contains(&hi) {
+        return None;
+    }
+    visit(lo, &mut found, &mut found_kappa)?;
+    visit(hi, &mut found, &mut found_kappa)?;
     // Intervals still to bound: (start, end, depth).
     let mut stack = [(0.0, 0.0, 0u32); MAX_DEPTH as usize + 1];
-    stack[0] = (0.0, 1.0, 0);
+    stack[0] = (lo, hi, 0);
     let mut len = 1;
     while len > 0 {
         len -= 1;
         let (a, b, depth) = stack[len];
-        let tight = |u: &[[f64; 9]; 3]| {
-            (0..3).all(|n| {
-                let floor = FLOOR_SHARE * axes.iter().map(|&i| found[n][i]).fold(0.0, f64::max);
-                axes.iter()
-                    .all(|&i| u[n][i] <= (BOUND_MARGIN * found[n][i]).max(floor))
-            })
+        let tight = |u: &[[f64; 9]; 3], kappa: f64| {
+            kappa <= BOUND_MARGIN * found_kappa
+                && (0..3).all(|n| {
+                    let floor = FLOOR_SHARE * axes.iter().map(|&i| found[n][i]).fold(0.0, f64::max);
+                    axes.iter()
+                        .all(|&i| u[n][i] <= (BOUND_MARGIN * found[n][i]).max(floor))
+                })
         };
         let bound = num.interval(a, b, min_speed);
-        if let Some(u) = &bound {
-            if tight(u) || depth >= MAX_DEPTH {
+        if let Some((u, kappa)) = &bound {
+            if tight(u, *kappa) || depth >= MAX_DEPTH {
                 for (up, un) in upper.iter_mut().zip(u) {
                     for &i in axes {
                         up[i] = up[i].max(un[i]);
                     }
                 }
+                upper_kappa = upper_kappa.max(*kappa);
                 continue;
             }
         } else if depth >= MAX_DEPTH {
             return None;
         }
         let mid = 0.5 * (a + b);
-        visit(mid, &mut found)?;
+        visit(mid, &mut found, &mut found_kappa)?;
         // Depth-first: at most one pending sibling per level.
         if let Some(slots) = stack.get_mut(len..len + 2) {
             slots[0] = (mid, b, depth + 1);
@@ -263,16 +296,16 @@ pub(super) fn derivative_bounds(
     }
     let mut b = AxisBounds::default();
     for &i in axes {
-        b.d1[i] = (BOUND_MARGIN * found[0][i]).max(upper[0][i]);
-        b.d2[i] = (BOUND_MARGIN * found[1][i]).max(upper[1][i]);
-        b.d3[i] = (BOUND_MARGIN * found[2][i]).max(upper[2][i]);
+        b.d1[i] = found[0][i].max(upper[0][i]);
+        b.d2[i] = found[1][i].max(upper[1][i]);
+        b.d3[i] = found[2][i].max(upper[2][i]);
         // A unit tangent has no linear component above 1.
         if Metric::Linear.axes().contains(&i) {
             b.d1[i] = b.d1[i].min(1.0);
         }
     }
     // Blends join linear moves only: their path distance is the linear arc length.
-    b.curvature = Metric::Linear.norm(&b.d2);
+    b.curvature = Metric::Linear.norm(&b.d2).min(found_kappa.max(upper_kappa));
     Some(b)
 }
 

@@ -114,10 +114,13 @@ impl Quintic {
         }
         let lambda = Metric::Linear.norm(&chord);
         // Refuse cusps: the parameter speed must stay well away from zero.
-        self.bounds =
-            derivative_bounds(&self.c, &self.moving, MIN_PARAMETER_SPEED * lambda, |u| {
-                self.exact(u)
-            })?;
+        self.bounds = derivative_bounds(
+            &self.c,
+            &self.moving,
+            MIN_PARAMETER_SPEED * lambda,
+            (0.0, 1.0),
+            |u| self.exact(u),
+        )?;
         self.speed2 = self.speed_squared();
         let mut table = [0.0; TABLE_INTERVALS + 1];
         self.intervals = arclen::fill_table_adaptive(&mut table, |u| self.speed(u));
@@ -253,6 +256,25 @@ impl Quintic {
         self.bounds
     }
 
+    /// Bounds of |dⁿq/dsⁿ| per axis, n = 1, 2, 3, and of the curvature over the part of the
+    /// curve from path distance `from` to `to` (clamped to the curve); the whole curve's
+    /// bounds where the part's cannot be had.
+    pub fn bounds_between(&self, from: f64, to: f64) -> AxisBounds {
+        let (u0, u1) = (self.parameter_at(from), self.parameter_at(to));
+        if u0 <= 0.0 && u1 >= 1.0 {
+            return self.bounds;
+        }
+        let lambda = Metric::Linear.norm(&std::array::from_fn(|i| self.to.0[i] - self.from.0[i]));
+        derivative_bounds(
+            &self.c,
+            &self.moving,
+            MIN_PARAMETER_SPEED * lambda,
+            (u0, u1.max(u0)),
+            |u| self.exact(u),
+        )
+        .map_or(self.bounds, |b| tighter(&b, &self.bounds))
+    }
+
     /// Exact arc-length derivatives and the parameter speed at `u`.
     fn exact(&self, u: f64) -> Exact {
         let d = self.derivs(u);
@@ -262,6 +284,18 @@ impl Quintic {
             t: [t1, t2, t3],
             sigma,
         }
+    }
+}
+
+/// The smaller of two bounds of the same curve, value by value.
+fn tighter(a: &AxisBounds, b: &AxisBounds) -> AxisBounds {
+    let min = |x: &[f64; 9], y: &[f64; 9]| std::array::from_fn(|i| x[i].min(y[i]));
+    AxisBounds {
+        d1: min(&a.d1, &b.d1),
+        d2: min(&a.d2, &b.d2),
+        d3: min(&a.d3, &b.d3),
+        wave: min(&a.wave, &b.wave),
+        curvature: a.curvature.min(b.curvature),
     }
 }
 
@@ -438,6 +472,50 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn bounds_of_a_stretch_cover_it_and_stay_within_the_whole_curves() {
+        for q in blends() {
+            let whole = q.bounds();
+            let len = q.length();
+            for (from, to) in [(0.0, 0.25), (0.25, 0.5), (0.4, 0.9), (0.75, 1.0)] {
+                let (a, b) = (from * len, to * len);
+                let part = q.bounds_between(a, b);
+                let (u0, u1) = (q.parameter_at(a), q.parameter_at(b));
+                for k in 0..=512 {
+                    let e = q.exact(u0 + (u1 - u0) * k as f64 / 512.0);
+                    let kappa = Metric::Linear.norm(&e.t[1]);
+                    assert!(kappa <= part.curvature, "κ {kappa} > {}", part.curvature);
+                    for i in 0..9 {
+                        for n in 0..3 {
+                            let bound = [part.d1[i], part.d2[i], part.d3[i]][n];
+                            assert!(
+                                e.t[n][i].abs() <= bound,
+                                "order {} axis {i} on {from}..{to}: {} > {bound}",
+                                n + 1,
+                                e.t[n][i]
+                            );
+                        }
+                    }
+                }
+                for i in 0..9 {
+                    assert!(part.d2[i] <= whole.d2[i] && part.d3[i] <= whole.d3[i]);
+                }
+                assert!(part.curvature <= whole.curvature);
+            }
+            // The curvature bound is never above the norm of the per-axis bounds, and not
+            // far above the curvature found on a fine grid.
+            let top = (0..=4096)
+                .map(|k| Metric::Linear.norm(&q.exact(k as f64 / 4096.0).t[1]))
+                .fold(0.0, f64::max);
+            assert!(whole.curvature <= Metric::Linear.norm(&whole.d2) * (1.0 + 1e-12));
+            assert!(
+                whole.curvature <= 1.1 * top + 1e-9,
+                "{} vs {top}",
+                whole.curvature
+            );
         }
     }
 

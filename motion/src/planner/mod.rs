@@ -202,10 +202,8 @@ impl Planner {
         let Some(table) = self.table.filter(|_| self.tcpm) else {
             return self.config.limits;
         };
-        let (bounds, straight) = match shape {
-            Shape::Element(g) => (g.bounds(), matches!(g, Segment::Line(_))),
-            Shape::Blend(q) => (q.bounds(), false),
-        };
+        let bounds = shape.bounds(offset, length);
+        let straight = matches!(shape, Shape::Element(Segment::Line(_)));
         let turns = (0..9).any(|i| letter(i).is_rotary() && bounds.d1[i] * length > 1e-9);
         if !turns {
             return self.config.limits;
@@ -417,7 +415,8 @@ impl Planner {
         // Refuse absent axes and unusable limits now, at the op that causes them.
         let whole = Shape::Element(segment.clone());
         let limits = self.limits_for(&whole, 0.0, segment.length());
-        piece_limits(&whole, segment.length(), feed, &limits).map_err(|e| piece_error(e, loc))?;
+        piece_limits(&whole, 0.0, segment.length(), feed, &limits)
+            .map_err(|e| piece_error(e, loc))?;
         self.planned_pose = segment.end();
         self.waiting.push_back(Waiting {
             element: Element {
@@ -499,7 +498,8 @@ impl Planner {
         for (shape, offset, length, feed, loc) in done.pieces {
             let is_element = matches!(shape, Shape::Element(_));
             let limits = self.limits_for(&shape, offset, length);
-            let l = piece_limits(&shape, length, feed, &limits).map_err(|e| piece_error(e, loc))?;
+            let l = piece_limits(&shape, offset, length, feed, &limits)
+                .map_err(|e| piece_error(e, loc))?;
             // A period that crosses from one piece into the next uses one jerk: give both
             // the lower of their jerk limits — unless the path state already moves on the
             // piece before, whose limits must not change under it (the generator may be

@@ -16,7 +16,10 @@
 //!   stop at the corner;
 //! * otherwise a [`Quintic`] blend whose distance from the programmed contour is checked
 //!   against the tolerance ([`blend_within`]); it is made as long as the tolerance allows,
-//!   at most half of each element.
+//!   at most half of each element. A blend whose curvature varies along it (through a
+//!   corner, or from a line into an arc) is committed as [`BLEND_PARTS`] pieces, each with
+//!   the limits of its own stretch ([`Shape::bounds`]): the path slows down inside the
+//!   blend, where the curvature grows, instead of before it.
 //!
 //! Split points make dense CAM code smooth. A short line between two gentle corners is
 //! consumed completely by the blends at its ends; they meet at its midpoint with its
@@ -26,7 +29,7 @@
 
 use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
-use crate::geom::{Metric, PathPoint, Segment};
+use crate::geom::{AxisBounds, Metric, PathPoint, Segment};
 use crate::limits::{Grip, LimitError, PieceLimits, path_limits};
 use klar_interp::SourceLoc;
 
@@ -77,6 +80,17 @@ impl Shape {
         match self {
             Shape::Element(g) => g.length(),
             Shape::Blend(q) => q.length(),
+        }
+    }
+
+    /// Derivative bounds over the part from `offset` over `length`: a blend's part has
+    /// bounds of its own ([`Quintic::bounds_between`]), an element's are the whole
+    /// element's.
+    pub(crate) fn bounds(&self, offset: f64, length: f64) -> AxisBounds {
+        match self {
+            Shape::Element(g) => g.bounds(),
+            Shape::Blend(q) if offset <= 0.0 && offset + length >= q.length() => q.bounds(),
+            Shape::Blend(q) => q.bounds_between(offset, offset + length),
         }
     }
 }
@@ -212,17 +226,15 @@ pub enum PieceError {
     Unplannable,
 }
 
-/// Path limits of a piece of `shape` with `length`, at feed `feed`.
+/// Path limits of the piece of `shape` from `offset` over `length`, at feed `feed`.
 pub fn piece_limits(
     shape: &Shape,
+    offset: f64,
     length: f64,
     feed: Option<f64>,
     limits: &[Option<AxisLimits>; 9],
 ) -> Result<PieceLimits, PieceError> {
-    let bounds = match shape {
-        Shape::Element(g) => g.bounds(),
-        Shape::Blend(q) => q.bounds(),
-    };
+    let bounds = shape.bounds(offset, length);
     let l =
         path_limits(&bounds, length, limits, feed.map(|f| f * MAX_OVERRIDE)).map_err(
             |e| match e {
@@ -255,7 +267,7 @@ fn jump_fits(
 ) -> bool {
     let top = |e: &Element| {
         let shape = Shape::Element(e.segment.clone());
-        piece_limits(&shape, e.segment.length(), e.feed, limits)
+        piece_limits(&shape, 0.0, e.segment.length(), e.feed, limits)
             .ok()
             .map(|l| l.velocity)
     };
@@ -361,12 +373,13 @@ fn too_slow(
     next: &Element,
     limits: &[Option<AxisLimits>; 9],
 ) -> bool {
-    let Ok(b) = piece_limits(shape, length, feed, limits) else {
+    let Ok(b) = piece_limits(shape, 0.0, length, feed, limits) else {
         return true;
     };
     let side = |e: &Element| {
         piece_limits(
             &Shape::Element(e.segment.clone()),
+            0.0,
             e.segment.length(),
             e.feed,
             limits,
@@ -414,6 +427,24 @@ fn split_curvature(
         *x -= along * t;
     }
     k.iter().all(|x| x.is_finite()).then_some(k)
+}
+
+/// Parts a blend whose curvature varies along it is committed in, each with the limits
+/// of its own part: where the curvature is low the path need not slow down yet.
+const BLEND_PARTS: usize = 4;
+
+/// Share of a blend's curvature bound below which the curvature at one of its ends counts
+/// as varying along it.
+const EVEN_CURVATURE: f64 = 0.7;
+
+/// True when the curvature of the blend `shape` from `a` to `b` varies along it (a corner
+/// or a line running into an arc, not a stretch of a polyline's circle).
+fn varies(shape: &Shape, a: &PathPoint, b: &PathPoint) -> bool {
+    let Shape::Blend(q) = shape else {
+        return false;
+    };
+    let m = Metric::Linear;
+    m.norm(&a.d2).min(m.norm(&b.d2)) < EVEN_CURVATURE * q.bounds().curvature
 }
 
 /// Tries to blend the corner between `cur` and `next`; on success returns the pieces and
@@ -490,7 +521,18 @@ fn try_corner(
             }
             let mut out = Committed::default();
             push_part(&mut out, cur, cur.trim, len - dl);
-            out.pieces.push((shape, 0.0, length, feed, next.loc));
+            let parts = if varies(&shape, &a, &b) {
+                BLEND_PARTS
+            } else {
+                1
+            };
+            let step = length / parts as f64;
+            for k in 0..parts {
+                let from = step * k as f64;
+                let to = if k + 1 == parts { length } else { from + step };
+                out.pieces
+                    .push((shape.clone(), from, to - from, feed, next.loc));
+            }
             next.trim = dr;
             next.split = right_split;
             return Some(out);
