@@ -108,9 +108,10 @@ fn small_corner_arcs_keep_every_axis_within_its_limits() {
     }
 }
 
-/// Largest distance of the samples from a line along X (y = 0, x ≤ 9) running into a
-/// quarter arc round (9, 1) of radius 1 and on up the line x = 10.
-fn largest_deviation(jerk: f64) -> f64 {
+/// A line along X (y = 0, x ≤ 9) running into a quarter arc round (9, 1) of radius 1 and on
+/// up the line x = 10, at 100 mm/s from the origin; the samples are checked against every
+/// limit.
+fn line_into_arc(jerk: f64) -> (Pose, Run) {
     let cfg = config(limits_xyz(100.0, A, jerk));
     let p = |x: f64, y: f64| Pose::xyz(x, y, 0.0);
     let f = Feed::Rate(100.0);
@@ -119,8 +120,15 @@ fn largest_deviation(jerk: f64) -> f64 {
         arc(2, p(9.0, 0.0), p(10.0, 1.0), [9.0, 1.0], Plane::XY, 90.0, f),
         line(3, p(10.0, 1.0), p(10.0, 10.0), f),
     ];
-    let out = run(cfg.clone(), p(0.0, 0.0), ops);
-    assert_within_limits(&cfg, &p(0.0, 0.0), &out.samples, 1.01);
+    let from = p(0.0, 0.0);
+    let out = run(cfg.clone(), from, ops);
+    assert_within_limits(&cfg, &from, &out.samples, 1.01);
+    (from, out)
+}
+
+/// Largest distance of the samples of [`line_into_arc`] from its contour.
+fn largest_deviation(jerk: f64) -> f64 {
+    let (_, out) = line_into_arc(jerk);
     out.samples
         .iter()
         .map(|s| {
@@ -155,17 +163,7 @@ fn a_blend_is_planned_in_parts_so_the_path_slows_down_inside_it() {
     // arc's where it ends. Planned in parts with limits of their own, the path enters it
     // faster than it runs at its tightest part; with one limit for the whole blend it
     // would have to be at that speed before the blend begins.
-    let cfg = config(limits_xyz(100.0, A, 1e5));
-    let p = |x: f64, y: f64| Pose::xyz(x, y, 0.0);
-    let f = Feed::Rate(100.0);
-    let ops = vec![
-        line(1, p(0.0, 0.0), p(9.0, 0.0), f),
-        arc(2, p(9.0, 0.0), p(10.0, 1.0), [9.0, 1.0], Plane::XY, 90.0, f),
-        line(3, p(10.0, 1.0), p(10.0, 10.0), f),
-    ];
-    let from = p(0.0, 0.0);
-    let out = run(cfg.clone(), from, ops);
-    assert_within_limits(&cfg, &from, &out.samples, 1.01);
+    let (from, out) = line_into_arc(1e5);
     let v = speeds(&from, &out);
     // The first sample off the line y = 0 is just inside the blend.
     let Some(k) = out.samples.iter().position(|s| s.pose.0[1].abs() > 1e-7) else {
