@@ -433,6 +433,10 @@ fn split_curvature(
 /// of its own part: where the curvature is low the path need not slow down yet.
 const BLEND_PARTS: usize = 4;
 
+/// Shortest part of a blend planned in parts (mm): shorter ones would pass within a servo
+/// period or two and only multiply the limits ahead.
+const MIN_PART: f64 = 0.1;
+
 /// Share of a blend's curvature bound below which the curvature at one of its ends counts
 /// as varying along it.
 const EVEN_CURVATURE: f64 = 0.7;
@@ -521,8 +525,11 @@ fn try_corner(
             }
             let mut out = Committed::default();
             push_part(&mut out, cur, cur.trim, len - dl);
-            let parts = if varies(&shape, &a, &b) {
-                BLEND_PARTS
+            // Blends through split points (dense code) keep one piece each: their
+            // curvature there is an estimate, and its noise would only multiply the limits.
+            let dense = left_fixed.is_some() || right_split.is_some();
+            let parts = if !dense && varies(&shape, &a, &b) {
+                ((length / MIN_PART) as usize).clamp(1, BLEND_PARTS)
             } else {
                 1
             };
