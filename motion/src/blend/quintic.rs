@@ -108,19 +108,7 @@ impl Quintic {
     /// Completes a curve from [`Quintic::shape`]: refuses cusps, bounds the derivatives and
     /// tabulates the arc length.
     pub(crate) fn finish(&mut self) -> Option<()> {
-        let mut chord = [0.0; 9];
-        for (i, c) in chord.iter_mut().enumerate() {
-            *c = self.to.0[i] - self.from.0[i];
-        }
-        let lambda = Metric::Linear.norm(&chord);
-        // Refuse cusps: the parameter speed must stay well away from zero.
-        self.bounds = derivative_bounds(
-            &self.c,
-            &self.moving,
-            MIN_PARAMETER_SPEED * lambda,
-            (0.0, 1.0),
-            |u| self.exact(u),
-        )?;
+        self.bounds = self.bounds_over(0.0, 1.0)?;
         self.speed2 = self.speed_squared();
         let mut table = [0.0; TABLE_INTERVALS + 1];
         self.intervals = arclen::fill_table_adaptive(&mut table, |u| self.speed(u));
@@ -264,15 +252,18 @@ impl Quintic {
         if u0 <= 0.0 && u1 >= 1.0 {
             return self.bounds;
         }
-        let lambda = Metric::Linear.norm(&std::array::from_fn(|i| self.to.0[i] - self.from.0[i]));
-        derivative_bounds(
-            &self.c,
-            &self.moving,
-            MIN_PARAMETER_SPEED * lambda,
-            (u0, u1.max(u0)),
-            |u| self.exact(u),
-        )
-        .map_or(self.bounds, |b| tighter(&b, &self.bounds))
+        self.bounds_over(u0, u1.max(u0))
+            .map_or(self.bounds, |b| tighter(&b, &self.bounds))
+    }
+
+    /// Derivative bounds over u ∈ [u0, u1] ([`derivative_bounds`]); `None` where the curve
+    /// has a cusp there: the parameter speed must stay well away from zero.
+    fn bounds_over(&self, u0: f64, u1: f64) -> Option<AxisBounds> {
+        let chord: [f64; 9] = std::array::from_fn(|i| self.to.0[i] - self.from.0[i]);
+        let min_speed = MIN_PARAMETER_SPEED * Metric::Linear.norm(&chord);
+        derivative_bounds(&self.c, &self.moving, min_speed, (u0, u1), |u| {
+            self.exact(u)
+        })
     }
 
     /// Exact arc-length derivatives and the parameter speed at `u`.

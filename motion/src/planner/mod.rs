@@ -30,7 +30,7 @@ pub use tcpm::{TCPM_DERATE, TableGeometry};
 
 use crate::config::{AxisLimits, PlannerConfig};
 use crate::error::MotionError;
-use crate::geom::{Arc, GeomError, Line, Poly, Segment, finite_pose, letter};
+use crate::geom::{Arc, AxisBounds, GeomError, Line, Poly, Segment, finite_pose, letter};
 use crate::profile::Ramp;
 use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
 use path::{Committed, Element, MAX_OVERRIDE, Piece, PieceError, Shape, commit, piece_limits};
@@ -197,12 +197,18 @@ impl Planner {
         self.table = Some(table);
     }
 
-    /// The per-axis limits for a piece of `shape` from `offset` over `length`.
-    fn limits_for(&self, shape: &Shape, offset: f64, length: f64) -> [Option<AxisLimits>; 9] {
+    /// The per-axis limits for a piece of `shape` from `offset` over `length`, with
+    /// derivative `bounds`.
+    fn limits_for(
+        &self,
+        shape: &Shape,
+        bounds: &AxisBounds,
+        offset: f64,
+        length: f64,
+    ) -> [Option<AxisLimits>; 9] {
         let Some(table) = self.table.filter(|_| self.tcpm) else {
             return self.config.limits;
         };
-        let bounds = shape.bounds(offset, length);
         let straight = matches!(shape, Shape::Element(Segment::Line(_)));
         let turns = (0..9).any(|i| letter(i).is_rotary() && bounds.d1[i] * length > 1e-9);
         if !turns {
@@ -414,9 +420,9 @@ impl Planner {
         }
         // Refuse absent axes and unusable limits now, at the op that causes them.
         let whole = Shape::Element(segment.clone());
-        let limits = self.limits_for(&whole, 0.0, segment.length());
-        piece_limits(&whole, 0.0, segment.length(), feed, &limits)
-            .map_err(|e| piece_error(e, loc))?;
+        let bounds = segment.bounds();
+        let limits = self.limits_for(&whole, &bounds, 0.0, segment.length());
+        piece_limits(&bounds, segment.length(), feed, &limits).map_err(|e| piece_error(e, loc))?;
         self.planned_pose = segment.end();
         self.waiting.push_back(Waiting {
             element: Element {
@@ -497,9 +503,11 @@ impl Planner {
         let mut events_at = self.committed_end;
         for (shape, offset, length, feed, loc) in done.pieces {
             let is_element = matches!(shape, Shape::Element(_));
-            let limits = self.limits_for(&shape, offset, length);
-            let l = piece_limits(&shape, offset, length, feed, &limits)
-                .map_err(|e| piece_error(e, loc))?;
+            // A blend's part has bounds of its own: computed once for both uses.
+            let bounds = shape.bounds(offset, length);
+            let limits = self.limits_for(&shape, &bounds, offset, length);
+            let l =
+                piece_limits(&bounds, length, feed, &limits).map_err(|e| piece_error(e, loc))?;
             // A period that crosses from one piece into the next uses one jerk: give both
             // the lower of their jerk limits — unless the path state already moves on the
             // piece before, whose limits must not change under it (the generator may be

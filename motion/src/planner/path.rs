@@ -89,7 +89,6 @@ impl Shape {
     pub(crate) fn bounds(&self, offset: f64, length: f64) -> AxisBounds {
         match self {
             Shape::Element(g) => g.bounds(),
-            Shape::Blend(q) if offset <= 0.0 && offset + length >= q.length() => q.bounds(),
             Shape::Blend(q) => q.bounds_between(offset, offset + length),
         }
     }
@@ -226,21 +225,19 @@ pub enum PieceError {
     Unplannable,
 }
 
-/// Path limits of the piece of `shape` from `offset` over `length`, at feed `feed`.
+/// Path limits of a piece of `length` with derivative `bounds` ([`Shape::bounds`]), at
+/// feed `feed`.
 pub fn piece_limits(
-    shape: &Shape,
-    offset: f64,
+    bounds: &AxisBounds,
     length: f64,
     feed: Option<f64>,
     limits: &[Option<AxisLimits>; 9],
 ) -> Result<PieceLimits, PieceError> {
-    let bounds = shape.bounds(offset, length);
-    let l =
-        path_limits(&bounds, length, limits, feed.map(|f| f * MAX_OVERRIDE)).map_err(
-            |e| match e {
-                LimitError::AbsentAxis(a) => PieceError::Absent(a),
-            },
-        )?;
+    let l = path_limits(bounds, length, limits, feed.map(|f| f * MAX_OVERRIDE)).map_err(
+        |e| match e {
+            LimitError::AbsentAxis(a) => PieceError::Absent(a),
+        },
+    )?;
     let usable = |x: f64| x.is_finite() && x > 0.0;
     if usable(l.velocity) && usable(l.acceleration) && usable(l.jerk) {
         Ok(l)
@@ -266,8 +263,7 @@ fn jump_fits(
     period: f64,
 ) -> bool {
     let top = |e: &Element| {
-        let shape = Shape::Element(e.segment.clone());
-        piece_limits(&shape, 0.0, e.segment.length(), e.feed, limits)
+        piece_limits(&e.segment.bounds(), e.segment.length(), e.feed, limits)
             .ok()
             .map(|l| l.velocity)
     };
@@ -366,26 +362,18 @@ const SLOW_BLEND: f64 = 0.1;
 /// True when a blend's limits fall so far below those of the elements it joins that an
 /// exact stop serves better (a blend through a sharp corner in a tight band).
 fn too_slow(
-    shape: &Shape,
+    blend: &Quintic,
     length: f64,
     feed: Option<f64>,
     cur: &Element,
     next: &Element,
     limits: &[Option<AxisLimits>; 9],
 ) -> bool {
-    let Ok(b) = piece_limits(shape, 0.0, length, feed, limits) else {
+    let Ok(b) = piece_limits(&blend.bounds(), length, feed, limits) else {
         return true;
     };
-    let side = |e: &Element| {
-        piece_limits(
-            &Shape::Element(e.segment.clone()),
-            0.0,
-            e.segment.length(),
-            e.feed,
-            limits,
-        )
-        .ok()
-    };
+    let side =
+        |e: &Element| piece_limits(&e.segment.bounds(), e.segment.length(), e.feed, limits).ok();
     let (Some(l), Some(r)) = (side(cur), side(next)) else {
         return true;
     };
@@ -441,12 +429,9 @@ const MIN_PART: f64 = 0.1;
 /// as varying along it.
 const EVEN_CURVATURE: f64 = 0.7;
 
-/// True when the curvature of the blend `shape` from `a` to `b` varies along it (a corner
-/// or a line running into an arc, not a stretch of a polyline's circle).
-fn varies(shape: &Shape, a: &PathPoint, b: &PathPoint) -> bool {
-    let Shape::Blend(q) = shape else {
-        return false;
-    };
+/// True when the curvature of the blend `q` from `a` to `b` varies along it (a corner or a
+/// line running into an arc, not a stretch of a polyline's circle).
+fn varies(q: &Quintic, a: &PathPoint, b: &PathPoint) -> bool {
     let m = Metric::Linear;
     m.norm(&a.d2).min(m.norm(&b.d2)) < EVEN_CURVATURE * q.bounds().curvature
 }
@@ -519,8 +504,7 @@ fn try_corner(
                 (Some(x), Some(y)) => Some(x.min(y)),
                 (x, y) => x.or(y),
             };
-            let shape = Shape::Blend(curve);
-            if theta > SPLIT_MAX_ANGLE && too_slow(&shape, length, feed, cur, next, limits) {
+            if theta > SPLIT_MAX_ANGLE && too_slow(&curve, length, feed, cur, next, limits) {
                 return None;
             }
             let mut out = Committed::default();
@@ -528,11 +512,12 @@ fn try_corner(
             // Blends through split points (dense code) keep one piece each: their
             // curvature there is an estimate, and its noise would only multiply the limits.
             let dense = left_fixed.is_some() || right_split.is_some();
-            let parts = if !dense && varies(&shape, &a, &b) {
+            let parts = if !dense && varies(&curve, &a, &b) {
                 ((length / MIN_PART) as usize).clamp(1, BLEND_PARTS)
             } else {
                 1
             };
+            let shape = Shape::Blend(curve);
             let step = length / parts as f64;
             for k in 0..parts {
                 let from = step * k as f64;
