@@ -77,11 +77,12 @@ pub struct Grip {
 }
 
 impl Grip {
-    /// The same acceleration at every speed.
+    /// The same acceleration at every speed (no speed-dependent part: its peak is
+    /// unbounded, so that [`Grip::min`] with a curved grip keeps that grip's peak).
     pub fn constant(a: f64) -> Grip {
         Grip {
             flat: a,
-            peak: a,
+            peak: f64::INFINITY,
             bend: 0.0,
         }
     }
@@ -375,5 +376,27 @@ mod tests {
             assert!(m.at(v) <= g.at(v).min(h.at(v)) + 1e-12);
         }
         assert!(g.undercut_by(&m) && h.undercut_by(&m) && !m.undercut_by(&g));
+    }
+
+    #[test]
+    fn a_constant_grip_combined_with_a_curved_one_is_the_lower_at_every_speed() {
+        // The curved grip keeps its peak in the combination: the result is exactly the
+        // lower of the two at each speed, not a curve below both.
+        let curved = Grip {
+            flat: f64::INFINITY,
+            peak: 1000.0,
+            bend: 1.0,
+        };
+        let flat = Grip::constant(460.0);
+        for m in [curved.min(flat), flat.min(curved)] {
+            for v in [0.0, 10.0, 20.0, 28.0, 30.0, 31.0] {
+                let want = curved.at(v).min(flat.at(v));
+                assert!(
+                    (m.at(v) - want).abs() < 1e-9,
+                    "{v}: {} against {want}",
+                    m.at(v)
+                );
+            }
+        }
     }
 }
