@@ -96,6 +96,8 @@ impl Planner {
             // Likewise a grip below the lowest before it at some speed; the limit keeps the
             // lowest grip so far, which every piece up to the next limit allows.
             if limit < low_speed || low_grip.undercut_by(&p.grip) || (k > 0 && jerk_drops) {
+                // Only a lower acceleration or jerk limit: a soft limit (see `speed::Limit`).
+                let soft = k > 0 && limit >= low_speed;
                 low_speed = low_speed.min(limit);
                 low_grip = low_grip.min(p.grip);
                 match w.limits.last_mut() {
@@ -109,6 +111,7 @@ impl Planner {
                             && limit >= last.speed * (1.0 - MERGE_SHARE) =>
                     {
                         last.speed = last.speed.min(limit);
+                        last.soft &= soft;
                         last.grip_after = low_grip;
                         last.jerk = last.jerk.min(p.jerk);
                         pre_grip = pre_grip.min(p.grip);
@@ -123,6 +126,7 @@ impl Planner {
                             grip_after: low_grip,
                             grip: pre_grip,
                             jerk: pre_jerk.min(p.jerk),
+                            soft,
                         });
                         // Limits further on are checked from this one (see `speed::settle`).
                         pre_grip = p.grip;
@@ -152,6 +156,7 @@ impl Planner {
                 grip_after: none,
                 grip: pre_grip,
                 jerk: pre_jerk,
+                soft: false,
             });
         }
         speed::settle(&mut w.limits);

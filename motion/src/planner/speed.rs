@@ -62,6 +62,11 @@ pub struct Limit {
     pub grip: Grip,
     /// The smallest jerk limit between the current position and `at`.
     pub jerk: f64,
+    /// True when the speed does not drop here: the limit only carries a lower acceleration
+    /// or jerk limit. [`settle`] never lowers such a limit's speed (it would stand as a
+    /// step in a braking curve for a lower limit further on), and the nearest limit ahead
+    /// that stands for all further ones is the nearest one that is not soft.
+    pub soft: bool,
 }
 
 /// What the generator needs to know about the path ahead.
@@ -235,51 +240,75 @@ fn arrival_accel(x: &Motion, l: &Limit) -> f64 {
     l.grip_after.at(x.v.max(peak_speed(x, l.jerk)))
 }
 
-/// Makes the limits consistent backwards (the backward pass of the look-ahead): each limit's
-/// speed is lowered until the next limit can be met from it, braking with the acceleration
-/// and jerk limits of the pieces between the two. Afterwards meeting the nearest limit ahead
-/// is enough to meet all the others, and each limit's `accel`/`jerk` covers only the
-/// pieces since the limit before it.
+/// Makes the limits consistent backwards (the backward pass of the look-ahead): each
+/// limit's speed is lowered until the next limit can be met from it, braking with the
+/// acceleration and jerk limits of the pieces between the two. Soft limits are left as they
+/// are and passed over: the next limit after them brakes with their acceleration and jerk
+/// limits too. Afterwards meeting the nearest limit ahead that is not soft is enough to meet
+/// all the others.
 pub fn settle(limits: &mut [Limit]) {
-    for k in (0..limits.len().saturating_sub(1)).rev() {
-        let (here, next) = (limits[k], limits[k + 1]);
-        let room = (next.at - here.at).max(0.0);
-        let (grip, jerk) = (next.grip.scaled(JUDGE), next.jerk * JUDGE);
-        let brake = |v: f64| brake_distance(&Motion { s: 0.0, v, a: 0.0 }, next.speed, &grip, jerk);
-        if here.speed <= next.speed || brake(here.speed) <= room {
+    let none = Grip::constant(f64::INFINITY);
+    let (mut grip, mut jerk) = (none, f64::INFINITY);
+    for l in limits.iter_mut() {
+        if l.soft {
+            grip = grip.min(l.grip);
+            jerk = jerk.min(l.jerk);
+        } else {
+            l.grip = l.grip.min(grip);
+            l.jerk = l.jerk.min(jerk);
+            (grip, jerk) = (none, f64::INFINITY);
+        }
+    }
+    let mut next = None;
+    for k in (0..limits.len()).rev() {
+        if limits[k].soft {
             continue;
         }
-        // With the grip of the highest speed the closed form is on the safe side.
-        let fast = braking_speed(next.speed, room, grip.at(here.speed), jerk);
-        let (mut lo, mut hi) = (next.speed, fast.min(here.speed));
-        let varies = grip.at(next.speed) > grip.at(here.speed) * (1.0 + GRIP_CHANGE);
-        if varies && brake(hi) <= room {
-            // The grip grows as the speed falls: find the highest speed by bisection.
-            lo = hi;
-            hi = here.speed;
-            for _ in 0..30 {
-                let mid = 0.5 * (lo + hi);
-                if brake(mid) <= room {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            hi = lo;
-        } else if brake(hi) > room {
-            // Rounding put the closed form a hair too high: settle it by bisection.
-            for _ in 0..40 {
-                let mid = 0.5 * (lo + hi);
-                if brake(mid) <= room {
-                    lo = mid;
-                } else {
-                    hi = mid;
-                }
-            }
-            hi = lo;
+        if let Some(n) = next {
+            limits[k].speed = settled(&limits[k], &limits[n]);
         }
-        limits[k].speed = hi;
+        next = Some(k);
     }
+}
+
+/// The speed of limit `here` lowered until limit `next` can be met from it.
+fn settled(here: &Limit, next: &Limit) -> f64 {
+    let room = (next.at - here.at).max(0.0);
+    let (grip, jerk) = (next.grip.scaled(JUDGE), next.jerk * JUDGE);
+    let brake = |v: f64| brake_distance(&Motion { s: 0.0, v, a: 0.0 }, next.speed, &grip, jerk);
+    if here.speed <= next.speed || brake(here.speed) <= room {
+        return here.speed;
+    }
+    // With the grip of the highest speed the closed form is on the safe side.
+    let fast = braking_speed(next.speed, room, grip.at(here.speed), jerk);
+    let (mut lo, mut hi) = (next.speed, fast.min(here.speed));
+    let varies = grip.at(next.speed) > grip.at(here.speed) * (1.0 + GRIP_CHANGE);
+    if varies && brake(hi) <= room {
+        // The grip grows as the speed falls: find the highest speed by bisection.
+        lo = hi;
+        hi = here.speed;
+        for _ in 0..30 {
+            let mid = 0.5 * (lo + hi);
+            if brake(mid) <= room {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi = lo;
+    } else if brake(hi) > room {
+        // Rounding put the closed form a hair too high: settle it by bisection.
+        for _ in 0..40 {
+            let mid = 0.5 * (lo + hi);
+            if brake(mid) <= room {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi = lo;
+    }
+    hi
 }
 
 /// The highest speed from which a jerk-limited ramp (starting and ending with zero
@@ -304,8 +333,8 @@ pub fn braking_speed(target: f64, room: f64, accel: f64, jerk: f64) -> f64 {
 
 /// The limits that bind state `x`, each with how far it misses them (see [`misses`]).
 ///
-/// Limits the state stands in are always checked. Of the limits ahead, the nearest stands
-/// for the speed limits of all further ones (after [`settle`]); when the state must slow
+/// Limits the state stands in are always checked. Of the limits ahead, the nearest that is
+/// not soft stands for the speed limits of all further ones (after [`settle`]); when the state must slow
 /// down for it, its ramp ends with zero acceleration there, so it stands for the
 /// acceleration limits further on too. Checking those further ones with their own (lower)
 /// jerk would judge a state on the nearest limit's braking curve unsafe although following
@@ -319,7 +348,7 @@ fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (&'a Limit
         }
         let (fast, hard) = misses(x, l, w);
         let fast = if ahead { 0.0 } else { fast };
-        if l.at > x.s && !ahead {
+        if l.at > x.s && !ahead && !l.soft {
             ahead = true;
             covered = slows_for(x, l);
         }
