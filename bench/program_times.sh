@@ -33,6 +33,20 @@ polyline() {
 polyline POLY_R25 25 2000 3000
 polyline POLY_R5 5 2000 3000
 
+# Dense code as a post-processor prints it: a full R25 circle in 0.01 mm chords (15708 of
+# them) with coordinates rounded to 1 µm, at F3000; started at the origin (centre at X-25).
+awk 'BEGIN {
+    pi = atan2(0, -1); r = 25; n = 15708
+    printf "0 BEGIN PGM DENSE_R25_1UM MM\n"
+    for (k = 1; k <= n; k++) {
+        phi = 2 * pi * k / n
+        x = -r + r * cos(phi); y = r * sin(phi)
+        if (k == n) { x = 0; y = 0 }
+        printf "%d L X%+.3f Y%+.3f%s\n", k, x, y, (k == 1 ? " F3000" : "")
+    }
+    printf "%d END PGM DENSE_R25_1UM MM\n", n + 1
+}' > "$work/DENSE_R25_1UM.h"
+
 machine_time() {
     "$klar" run "$1" --machine "$2" | awk '/^machine time:/ { print $3 }'
 }
@@ -46,7 +60,8 @@ for prog in \
     "$work/POLY_R5.h" \
     "$here/programs/helix_p2.h" \
     "$here/programs/square_r10_plunge.h" \
-    "$here/programs/helix_p1_f3000.h"; do
+    "$here/programs/helix_p1_f3000.h" \
+    "$work/DENSE_R25_1UM.h"; do
     a="$(machine_time "$prog" "$here/machine-jerk-1e5.toml")"
     b="$(machine_time "$prog" "$here/machine-jerk-unlimited.toml")"
     printf "%-44s %10s s %10s s\n" "$(basename "$prog")" "$a" "$b"

@@ -21,8 +21,10 @@
 //! ([`Planner::hold`], [`Planner::resume`]) act at once with jerk-limited speed changes on
 //! the path.
 
+mod commit;
 pub mod path;
 mod scan;
+pub mod smooth;
 pub mod speed;
 pub mod tcpm;
 
@@ -33,7 +35,7 @@ use crate::error::MotionError;
 use crate::geom::{Arc, AxisBounds, GeomError, Line, Poly, Segment, finite_pose, letter};
 use crate::profile::Ramp;
 use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
-use path::{Committed, Element, MAX_OVERRIDE, Piece, PieceError, Shape, commit, piece_limits};
+use path::{Element, MAX_OVERRIDE, Piece, PieceError, Shape, Waiting, piece_limits};
 use speed::{Motion, Window};
 use std::collections::VecDeque;
 
@@ -48,7 +50,7 @@ pub const CONTINUITY_TOLERANCE: f64 = 1e-6;
 /// Distance (mm) within which a standstill counts as reaching a stop point.
 const STOP_SNAP: f64 = 1e-6;
 
-/// Elements kept back for corner decisions.
+/// Elements kept back for corner decisions at least.
 const ELEMENTS_AHEAD: usize = 3;
 
 /// The commanded state of all program axes at one servo instant.
@@ -84,13 +86,6 @@ enum Marker {
     Stop { at: f64, op: Option<Op>, dwell: f64 },
 }
 
-/// An element waiting for its corners, with the events that follow it.
-#[derive(Debug, Clone)]
-struct Waiting {
-    element: Element,
-    events: Vec<Op>,
-}
-
 /// The planner: takes ops, gives samples at the servo period.
 ///
 /// Call [`Planner::push`] while [`Planner::needs_input`] is true (or [`Planner::finish`] when
@@ -110,6 +105,10 @@ pub struct Planner {
     accel_floor: f64,
     jerk_floor: f64,
     waiting: VecDeque<Waiting>,
+    /// The vertices of the polyline of linear lines up to the start of the front waiting
+    /// element (the split-point fit looks back on them; a bounded number, see `commit.rs`),
+    /// and while an element is committed those of the linear lines waiting after it.
+    vertices: Vec<Pose>,
     /// Events before the first waiting element (placed at the planned end).
     pieces: VecDeque<Piece>,
     markers: VecDeque<Marker>,
@@ -169,6 +168,7 @@ impl Planner {
             accel_floor,
             jerk_floor,
             waiting: VecDeque::new(),
+            vertices: Vec::new(),
             pieces: VecDeque::new(),
             markers: VecDeque::new(),
             committed_end: 0.0,
@@ -432,10 +432,12 @@ impl Planner {
                 tolerance: self.tolerance,
                 trim: 0.0,
                 split: None,
+                // Nothing waits only where the path ends in a stop (or has not started).
+                from_rest: self.waiting.is_empty(),
             },
             events: Vec::new(),
         });
-        while self.waiting.len() >= ELEMENTS_AHEAD {
+        while self.waiting.len() >= ELEMENTS_AHEAD && self.front_decidable() {
             self.commit_front(false)?;
         }
         Ok(())
@@ -469,89 +471,6 @@ impl Planner {
                 op,
             }),
         }
-    }
-
-    /// Commits every waiting element, the last one ending in a stop.
-    fn flush(&mut self) -> Result<(), MotionError> {
-        while !self.waiting.is_empty() {
-            self.commit_front(true)?;
-        }
-        Ok(())
-    }
-
-    /// Cuts the front element at its next corner and appends its pieces to the path.
-    fn commit_front(&mut self, flushing: bool) -> Result<(), MotionError> {
-        let Some(mut front) = self.waiting.pop_front() else {
-            return Ok(());
-        };
-        let done: Committed = {
-            let mut rest = self.waiting.iter_mut();
-            let next = rest.next().map(|w| &mut w.element);
-            let after = rest.next().map(|w| &w.element);
-            let after = if flushing { None } else { after };
-            commit(
-                &mut front.element,
-                next,
-                after,
-                &self.config.limits,
-                self.config.period,
-            )
-        };
-        if done.stop_first {
-            self.add_stop(self.committed_end);
-        }
-        let mut events_at = self.committed_end;
-        for (shape, offset, length, feed, loc) in done.pieces {
-            let is_element = matches!(shape, Shape::Element(_));
-            // A blend's part has bounds of its own: computed once for both uses.
-            let bounds = shape.bounds(offset, length);
-            let limits = self.limits_for(&shape, &bounds, offset, length);
-            let l =
-                piece_limits(&bounds, length, feed, &limits).map_err(|e| piece_error(e, loc))?;
-            // A period that crosses from one piece into the next uses one jerk: give both
-            // the lower of their jerk limits — unless the path state already moves on the
-            // piece before, whose limits must not change under it (the generator may be
-            // half-way through a ramp planned with them). That drop is met by the scan
-            // (`Planner::scan`) instead.
-            let mut jerk = l.jerk;
-            if let Some(prev) = self.pieces.back_mut()
-                && prev.start > self.state.s
-            {
-                prev.jerk = prev.jerk.min(jerk);
-                jerk = jerk.min(prev.jerk);
-            }
-            self.pieces.push_back(Piece {
-                shape,
-                offset,
-                length,
-                start: self.committed_end,
-                vmax: l.velocity,
-                feed,
-                grip: l.grip,
-                jerk,
-                loc,
-            });
-            self.committed_end += length;
-            if is_element {
-                events_at = self.committed_end;
-            }
-        }
-        for op in front.events {
-            self.markers.push_back(Marker::Event { at: events_at, op });
-        }
-        if done.stop_at_end && !(flushing && self.waiting.is_empty()) {
-            self.add_stop(self.committed_end);
-        }
-        Ok(())
-    }
-
-    /// A plain standstill at `at`.
-    fn add_stop(&mut self, at: f64) {
-        self.markers.push_back(Marker::Stop {
-            at,
-            op: None,
-            dwell: 0.0,
-        });
     }
 
     /// Declares the end of input: the planner drains what it holds.

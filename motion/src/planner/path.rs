@@ -1,9 +1,11 @@
 //! The blended path: programmed elements cut back at their corners and joined by blend
 //! curves, as a queue of [`Piece`]s with their speed, acceleration and jerk limits.
 //!
-//! Elements wait in a short queue until the element after the next is known, because the
-//! blend at a corner may pass through the middle of a short line (a *split point*, see
-//! below). Then the front element is cut and committed: its remaining part, then the blend.
+//! Elements wait in a queue until the element after the next is known, because the blend
+//! at a corner may pass through the middle of a short line (a *split point*, see below),
+//! and in dense code until the short lines ahead reach as far as a run and the fit at its
+//! end look. Then the front element is cut and committed: its remaining part, then the
+//! blend.
 //!
 //! Corner rules, for two consecutive elements without a stop between them:
 //! * already curvature-continuous (same tangent, same curvature vector): no blend;
@@ -22,22 +24,29 @@
 //!   blend, where the curvature grows, instead of before it.
 //!
 //! Split points make dense CAM code smooth. A short line between two gentle corners is
-//! consumed completely by the blends at its ends; they meet at its midpoint with its
-//! direction and a curvature vector estimated from the neighbouring directions
-//! (κ ≈ Δt/Δs over the two neighbouring midpoints), instead of the line's zero curvature.
-//! A polyline approximating a circle then becomes a curve of almost constant curvature.
+//! consumed completely by the blends at its ends; they meet near its midpoint on a curve
+//! fitted to the polyline around it ([`split_point`]: position, tangent and curvature
+//! vector), instead of the line's own direction and zero curvature. Once the path runs
+//! through split points, a blend does not stop at the next one: it spans a *run* of short
+//! lines up to [`RUN_LENGTH`], from one split point to one far ahead, and uses up the lines
+//! between ([`Committed::consumed`]). The fitted points carry the rounding noise of the
+//! program's coordinates; a blend between points 0.01 mm apart would turn that noise into a
+//! large third derivative (the jerk of the curve at constant speed), one over a run barely
+//! notices it. A polyline approximating a circle then becomes a curve of almost constant
+//! curvature, followed at the programmed feed.
 
+use super::smooth::{Stencil, end_point, split_point};
 use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
-use crate::geom::{AxisBounds, Metric, PathPoint, Segment};
+use crate::geom::{AxisBounds, Line, Metric, PathPoint, Segment};
 use crate::limits::{Grip, LimitError, PieceLimits, path_limits};
-use klar_interp::SourceLoc;
+use klar_interp::{Op, Pose, SourceLoc};
 
 /// Largest feed override, as a factor: path limits are prepared for it.
 pub const MAX_OVERRIDE: f64 = 1.5;
 
 /// Largest turning angle (radians) at either end of a line that may become a split point.
-const SPLIT_MAX_ANGLE: f64 = 0.3;
+pub const SPLIT_MAX_ANGLE: f64 = 0.3;
 
 /// Largest turning angle (radians) that is blended; sharper corners (beyond 120°, nearly
 /// reversing) stop exactly: a blend there would be slow anyway and its curvature peak too
@@ -168,8 +177,40 @@ pub struct Element {
     pub tolerance: f64,
     /// Length already used by the blend before it.
     pub trim: f64,
-    /// Curvature vector at `trim` when that is a split point.
-    pub split: Option<[f64; 9]>,
+    /// The split point at `trim` (where the blend before ended), when it is one.
+    pub split: Option<PathPoint>,
+    /// True when the path stands still at its start (the first element after a stop).
+    pub from_rest: bool,
+}
+
+/// An element waiting for its corners, with the events that follow it.
+#[derive(Debug, Clone)]
+pub struct Waiting {
+    /// The element.
+    pub element: Element,
+    /// Non-motion ops after it.
+    pub events: Vec<Op>,
+}
+
+/// The polyline vertices around the corner being decided: `all[first]` is the start of the
+/// element after the one being committed, `all[first + j]` the start of the `j`-th waiting
+/// element after it while those are linear lines; before `first` lie the vertices of the
+/// linear lines already committed.
+#[derive(Debug, Clone, Copy)]
+pub struct Vertices<'a> {
+    /// The vertices in path order.
+    pub all: &'a [Pose],
+    /// Index of the next element's start.
+    pub first: usize,
+}
+
+impl<'a> Vertices<'a> {
+    /// The stencil of the `j`-th element after the one being committed.
+    fn around(&self, j: usize) -> Stencil<'a> {
+        let i = (self.first + j).min(self.all.len());
+        let (behind, ahead) = self.all.split_at((i + 1).min(self.all.len()));
+        Stencil { behind, ahead }
+    }
 }
 
 /// A new piece: its shape, where on the shape it starts, its length, feed and block.
@@ -214,6 +255,9 @@ pub struct Committed {
     pub stop_first: bool,
     /// True when the path must stop after all new pieces.
     pub stop_at_end: bool,
+    /// Waiting elements the new pieces used up completely (a run of dense code blended as
+    /// one curve): their events follow the new pieces.
+    pub consumed: usize,
 }
 
 /// Why a piece cannot be planned.
@@ -287,22 +331,39 @@ fn diff_norm(a: &[f64; 9], b: &[f64; 9]) -> f64 {
 
 /// Commits the part of `cur` up to its next corner, and the blend at that corner.
 ///
-/// `next` is the following element (None: `cur` is the last before a stop); `after` the
-/// one after it (to decide whether `next` becomes a split point). Updates `next`'s trim.
+/// `rest` are the elements waiting after it (none: `cur` is the last before a stop); the one
+/// after the next decides whether the next becomes a split point, and a run of dense code
+/// may be blended over several of them ([`Committed::consumed`]). Updates the trim of the
+/// element the new pieces end on. `vertices` are the polyline's vertices around the corner;
+/// `last` is true when the path stops at the end of `rest` (a run may end there).
 pub fn commit(
     cur: &mut Element,
-    next: Option<&mut Element>,
-    after: Option<&Element>,
+    rest: &mut [Waiting],
+    last: bool,
+    vertices: &Vertices<'_>,
     limits: &[Option<AxisLimits>; 9],
     period: f64,
 ) -> Committed {
     let mut out = Committed::default();
-    let len = cur.segment.length();
+    if (cur.split.is_some() || cur.from_rest)
+        && let Some(done) = try_run(cur, rest, last, vertices)
+    {
+        return done;
+    }
+    let (next, further) = match rest.split_first_mut() {
+        Some((n, f)) => (Some(&mut n.element), f),
+        None => (None, &mut [][..]),
+    };
+    let after = further.first().map(|w| &w.element);
+    let stencil = vertices.around(0);
+    let stencil = &stencil;
     let Some(next) = next else {
-        push_part(&mut out, cur, cur.trim, len);
+        detach_split(cur);
+        push_part(&mut out, cur, cur.trim, cur.segment.length());
         out.stop_at_end = true;
         return out;
     };
+    let len = cur.segment.length();
     let end = cur.segment.point(len);
     let start = next.segment.point(0.0);
     let tangent = cur.segment.metric() == next.segment.metric()
@@ -319,26 +380,39 @@ pub fn commit(
         && cur.segment.metric() == Metric::Linear
         && next.segment.metric() == Metric::Linear;
     if blendable {
-        if let Some(done) = try_corner(cur, next, after, tol, limits) {
+        if let Some(done) = try_corner(cur, next, after, tol, stencil, limits) {
             return done;
         }
         if cur.split.is_some() {
             // The blend before ends at a split point whose curvature no blend here can take
             // over: stop there, then treat the rest of the line as a plain element.
-            cur.split = None;
-            if let Some(mut done) = try_corner(cur, next, None, tol, limits) {
+            detach_split(cur);
+            if let Some(mut done) = try_corner(cur, next, None, tol, stencil, limits) {
                 done.stop_first = true;
                 return done;
             }
             out.stop_first = true;
         }
     }
-    cur.split = None;
-    push_part(&mut out, cur, cur.trim, len);
+    detach_split(cur);
+    push_part(&mut out, cur, cur.trim, cur.segment.length());
     out.stop_at_end = true;
     next.trim = 0.0;
     next.split = None;
+    next.from_rest = true;
     out
+}
+
+/// Makes the rest of a line that starts at a split point a plain element again: the line
+/// from the split point (which may lie a little off the programmed line, see
+/// [`split_point`]) to the line's end, so that the path runs on without a step.
+fn detach_split(cur: &mut Element) {
+    if let Some(p) = cur.split.take()
+        && let Ok(Some(line)) = Line::new(p.pose, cur.segment.end())
+    {
+        cur.segment = Segment::Line(line);
+        cur.trim = 0.0;
+    }
 }
 
 /// The element's own part from `from` to `to`, if it has length.
@@ -381,40 +455,33 @@ fn too_slow(
         || b.acceleration < SLOW_BLEND * l.acceleration.min(r.acceleration)
 }
 
-/// The curvature vector to give `mid` at its midpoint when it can become a split point
-/// between `prev` and `next`; `tp` and `tm` are the unit tangents at the end of `prev` and
-/// the start of `mid`, `turn` the angle between them.
-fn split_curvature(
+/// The split point to give `mid` at its midpoint when it can become one between `prev`
+/// and `next` ([`split_point`]); `tp` and `tm` are the unit tangents at the end of `prev`
+/// and the start of `mid`, `turn` the angle between them.
+fn split_for(
     prev: &Element,
     mid: &Element,
     next: &Element,
     tol: f64,
-    (tp, tm, turn): (&[f64; 9], &[f64; 9], f64),
-) -> Option<[f64; 9]> {
-    if !matches!(mid.segment, Segment::Line(_))
-        || mid.segment.metric() != Metric::Linear
+    stencil: &Stencil<'_>,
+    (tm, turn): (&[f64; 9], f64),
+) -> Option<PathPoint> {
+    let Segment::Line(line) = &mid.segment else {
+        return None;
+    };
+    if mid.segment.metric() != Metric::Linear
         || next.segment.metric() != Metric::Linear
+        || prev.segment.metric() != Metric::Linear
     {
         return None;
     }
-    let lp = prev.segment.length();
     let lm = mid.segment.length();
-    let ln = next.segment.length();
     let tn = next.segment.point(0.0).d1;
     let worst = turn.max(angle(tm, &tn));
     if worst > SPLIT_MAX_ANGLE || lm * worst > 2.0 * tol || tol.min(next.tolerance) <= 0.0 {
         return None;
     }
-    let ds = 0.5 * (lp.min(2.0 * lm) + 2.0 * lm + ln.min(2.0 * lm));
-    let mut k = [0.0; 9];
-    for (i, x) in k.iter_mut().enumerate() {
-        *x = (tn[i] - tp[i]) / ds;
-    }
-    let along = Metric::Linear.dot(&k, tm);
-    for (x, t) in k.iter_mut().zip(tm) {
-        *x -= along * t;
-    }
-    k.iter().all(|x| x.is_finite()).then_some(k)
+    split_point(line, stencil, tol, SPLIT_MAX_ANGLE)
 }
 
 /// Parts a blend whose curvature varies along it is committed in, each with the limits
@@ -443,6 +510,7 @@ fn try_corner(
     next: &mut Element,
     after: Option<&Element>,
     tol: f64,
+    stencil: &Stencil<'_>,
     limits: &[Option<AxisLimits>; 9],
 ) -> Option<Committed> {
     let len = cur.segment.length();
@@ -453,8 +521,8 @@ fn try_corner(
     if theta > MAX_BLEND_ANGLE {
         return None;
     }
-    let turn = (&t_end.d1, &t_start.d1, theta);
-    let mut right_split = after.and_then(|a| split_curvature(cur, next, a, tol, turn));
+    let mut right_split =
+        after.and_then(|a| split_for(cur, next, a, tol, stencil, (&t_start.d1, theta)));
     let left_fixed = cur.split;
     let cap_left = (len - cur.trim).min(0.5 * len).max(0.0);
     let cap_right = 0.5 * nlen;
@@ -478,14 +546,8 @@ fn try_corner(
         if dl < MIN_BLEND && left_fixed.is_none() || dr < MIN_BLEND {
             return None;
         }
-        let mut a = cur.segment.point(len - dl);
-        if let Some(k) = left_fixed {
-            a.d2 = k;
-        }
-        let mut b = next.segment.point(dr);
-        if let Some(k) = right_split {
-            b.d2 = k;
-        }
+        let a = left_fixed.unwrap_or_else(|| cur.segment.point(len - dl));
+        let b = right_split.unwrap_or_else(|| next.segment.point(dr));
         let contour = [
             ContourPart {
                 segment: &cur.segment,
@@ -538,4 +600,167 @@ fn try_corner(
         }
     }
     None
+}
+
+/// Path length (mm) a blend through dense code spans at most: a run of short lines is
+/// blended as one curve between split points this far apart, over which the noise of their
+/// fits ([`split_point`]) bends the curve far less than between neighbouring chords.
+pub const RUN_LENGTH: f64 = 1.0;
+
+/// Lines a run spans at most.
+pub const RUN_ELEMENTS: usize = 64;
+
+/// True for a line that moves linear axes only (runs leave rotary moves, whose limits
+/// depend on the machine's kinematics along the way, to blends between neighbours).
+fn linear_only(e: &Element) -> bool {
+    matches!(&e.segment, Segment::Line(l) if Metric::Rotary.norm(&l.point(0.0).d1) == 0.0)
+        && e.segment.metric() == Metric::Linear
+}
+
+/// The lower of two feeds (`None`: rapid, the higher of any).
+fn min_feed(x: Option<f64>, y: Option<f64>) -> Option<f64> {
+    match (x, y) {
+        (Some(x), Some(y)) => Some(x.min(y)),
+        (x, y) => x.or(y),
+    }
+}
+
+/// Blends a run of dense code: from the split point `cur` starts at (or its start, where
+/// the path stands still) to the split point of a later short line, using up the short
+/// lines between. The run ends at the last line within [`RUN_LENGTH`] whose corners a split
+/// point allows, or at the end of the last line before a stop (`last`); where the blend
+/// leaves the tolerance band, runs half as long are tried. `None` when no run of at least
+/// two lines fits (the corner is then decided as usual).
+fn try_run(
+    cur: &Element,
+    rest: &mut [Waiting],
+    last: bool,
+    vertices: &Vertices<'_>,
+) -> Option<Committed> {
+    if !linear_only(cur) {
+        return None;
+    }
+    let len = cur.segment.length();
+    let mut tol = cur.tolerance;
+    let mut reach = len - cur.trim;
+    let mut prev = cur.segment.point(len).d1;
+    let mut longest = 0;
+    let mut to_stop = None;
+    for j in 0..rest.len().min(RUN_ELEMENTS + 1) {
+        let e = &rest[j].element;
+        if !linear_only(e) {
+            break;
+        }
+        let lj = e.segment.length();
+        let dir = e.segment.point(0.0).d1;
+        let t = tol.min(e.tolerance);
+        let Some(after) = rest.get(j + 1).map(|w| &w.element) else {
+            // The last line before a stop: the run may end at its end.
+            let turn = angle(&prev, &dir);
+            if last && turn <= SPLIT_MAX_ANGLE && lj * turn <= 2.0 * t && reach + lj <= RUN_LENGTH {
+                to_stop = Some((j, t));
+            }
+            break;
+        };
+        let turn = angle(&prev, &dir).max(angle(&dir, &after.segment.point(0.0).d1));
+        if after.segment.metric() != Metric::Linear
+            || turn > SPLIT_MAX_ANGLE
+            || lj * turn > 2.0 * t
+            || t.min(after.tolerance) <= 0.0
+            || reach + 0.5 * lj > RUN_LENGTH
+        {
+            break;
+        }
+        tol = t;
+        longest = j;
+        reach += lj;
+        prev = dir;
+    }
+    if tol <= 0.0 || (longest == 0 && to_stop.is_none()) {
+        return None;
+    }
+    let start = match cur.split {
+        Some(p) => p,
+        None if cur.from_rest && cur.trim == 0.0 => {
+            let Segment::Line(line) = &cur.segment else {
+                return None;
+            };
+            // The vertices from the line's end on.
+            let ahead = vertices.around(0);
+            end_point(line, false, &ahead, SPLIT_MAX_ANGLE)?
+        }
+        None => return None,
+    };
+    if let Some((j, t)) = to_stop
+        && let Some(done) = run_to(cur, rest, j, &start, t, vertices, true)
+    {
+        return Some(done);
+    }
+    let mut m = longest;
+    while m >= 1 {
+        if let Some(done) = run_to(cur, rest, m, &start, tol, vertices, false) {
+            return Some(done);
+        }
+        m /= 2;
+    }
+    None
+}
+
+/// The run from `start` to the split point of the `m`-th waiting element (or to its end,
+/// where the path stops: `to_end`), if its blend keeps within `tol`.
+fn run_to(
+    cur: &Element,
+    rest: &mut [Waiting],
+    m: usize,
+    start: &PathPoint,
+    tol: f64,
+    vertices: &Vertices<'_>,
+    to_end: bool,
+) -> Option<Committed> {
+    let Segment::Line(line) = &rest.get(m)?.element.segment else {
+        return None;
+    };
+    let (end, upto) = if to_end {
+        let p = end_point(line, true, &vertices.around(m), SPLIT_MAX_ANGLE)?;
+        (p, line.length())
+    } else {
+        let p = split_point(line, &vertices.around(m), tol, SPLIT_MAX_ANGLE)?;
+        (p, 0.5 * line.length())
+    };
+    let mut contour = Vec::with_capacity(m + 2);
+    contour.push(ContourPart {
+        segment: &cur.segment,
+        from: cur.trim,
+        to: cur.segment.length(),
+    });
+    for w in &rest[..m] {
+        contour.push(ContourPart {
+            segment: &w.element.segment,
+            from: 0.0,
+            to: w.element.segment.length(),
+        });
+    }
+    contour.push(ContourPart {
+        segment: &rest[m].element.segment,
+        from: 0.0,
+        to: upto,
+    });
+    let (curve, _) = blend_within(start, &end, &contour, tol)?;
+    let feed = rest[..=m]
+        .iter()
+        .fold(cur.feed, |f, w| min_feed(f, w.element.feed));
+    let length = curve.length();
+    let mut out = Committed::default();
+    let last = &mut rest[m].element;
+    out.pieces
+        .push((Shape::Blend(curve), 0.0, length, feed, last.loc));
+    if to_end {
+        out.consumed = m + 1;
+        out.stop_at_end = true;
+    } else {
+        last.trim = upto;
+        last.split = Some(end);
+        out.consumed = m;
+    }
+    Some(out)
 }

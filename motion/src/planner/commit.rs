@@ -1,0 +1,180 @@
+//! Committing waiting elements onto the path: when the front element's corner can be
+//! decided, the vertices of the polyline around it, and the pieces, stops and events the
+//! commit produces.
+
+use super::path::{Committed, Element, Piece, Shape, Vertices, commit, piece_limits};
+use super::{Marker, Planner, path, piece_error, smooth};
+use crate::error::MotionError;
+use crate::geom::{Metric, Segment};
+
+/// Elements kept back at most: more wait while the lines after the next corner but one
+/// are shorter than a run of dense code and the split-point fit at its end reach
+/// ([`path::RUN_ELEMENTS`], [`smooth::SPAN`]).
+const ELEMENTS_AHEAD_MAX: usize = path::RUN_ELEMENTS + smooth::LOOK + 2;
+
+/// Polyline vertices kept behind the corner being decided, for the split-point fit.
+const VERTICES_BEHIND: usize = smooth::LOOK;
+
+/// Path length (mm) of the lines waiting after the next corner but one that lets the front
+/// element's corner be decided: a run and the fit at its end.
+const AHEAD_REACH: f64 = path::RUN_LENGTH + smooth::SPAN;
+
+impl Planner {
+    /// True when enough elements wait for the front one's corner (and the split point
+    /// after it) to be decided: the lines after the next corner but one reach as far as a
+    /// run and the split-point fit look, or end, or turn sharply, or the queue is full.
+    pub(super) fn front_decidable(&self) -> bool {
+        if self.waiting.len() >= ELEMENTS_AHEAD_MAX {
+            return true;
+        }
+        let mut reach = 0.0;
+        let mut before: Option<&Element> = self.waiting.get(1).map(|w| &w.element);
+        for w in self.waiting.iter().skip(2) {
+            let e = &w.element;
+            if !matches!(e.segment, Segment::Line(_)) || e.segment.metric() != Metric::Linear {
+                return true;
+            }
+            // A corner sharper than a split point allows ends any run before it.
+            if let Some(b) = before {
+                let end = b.segment.point(b.segment.length()).d1;
+                let start = e.segment.point(0.0).d1;
+                if Metric::Linear.dot(&end, &start) < path::SPLIT_MAX_ANGLE.cos() {
+                    return true;
+                }
+            }
+            before = Some(e);
+            reach += e.segment.length();
+            if reach >= AHEAD_REACH {
+                return true;
+            }
+        }
+        false
+    }
+
+    /// Adds the front element's end to the vertices behind (or starts them anew there
+    /// after anything but a linear line), then the ends of the linear lines waiting after
+    /// it; returns the index of the front element's end.
+    fn gather_vertices(&mut self, front: &Element) -> usize {
+        let linear = |e: &Element| {
+            matches!(e.segment, Segment::Line(_)) && e.segment.metric() == Metric::Linear
+        };
+        let v = &mut self.vertices;
+        if !linear(front) || v.last() != Some(&front.segment.start()) {
+            v.clear();
+            if linear(front) {
+                v.push(front.segment.start());
+            }
+        }
+        v.push(front.segment.end());
+        if v.len() > 2 * VERTICES_BEHIND {
+            v.drain(..v.len() - VERTICES_BEHIND);
+        }
+        let first = v.len() - 1;
+        for w in &self.waiting {
+            if !linear(&w.element) {
+                break;
+            }
+            v.push(w.element.segment.end());
+        }
+        first
+    }
+
+    /// Commits every waiting element, the last one ending in a stop.
+    pub(super) fn flush(&mut self) -> Result<(), MotionError> {
+        while !self.waiting.is_empty() {
+            self.commit_front(true)?;
+        }
+        Ok(())
+    }
+
+    /// Cuts the front element at its next corner and appends its pieces to the path.
+    pub(super) fn commit_front(&mut self, flushing: bool) -> Result<(), MotionError> {
+        let Some(mut front) = self.waiting.pop_front() else {
+            return Ok(());
+        };
+        let first = self.gather_vertices(&front.element);
+        let done: Committed = {
+            let vertices = Vertices {
+                all: &self.vertices,
+                first,
+            };
+            commit(
+                &mut front.element,
+                self.waiting.make_contiguous(),
+                flushing,
+                &vertices,
+                &self.config.limits,
+                self.config.period,
+            )
+        };
+        // The vertices behind end at the start of the new front element.
+        self.vertices
+            .truncate((first + done.consumed + 1).min(self.vertices.len()));
+        if done.stop_first {
+            self.add_stop(self.committed_end);
+        }
+        let mut events_at = self.committed_end;
+        for (shape, offset, length, feed, loc) in done.pieces {
+            let is_element = matches!(shape, Shape::Element(_));
+            // A blend's part has bounds of its own: computed once for both uses.
+            let bounds = shape.bounds(offset, length);
+            let limits = self.limits_for(&shape, &bounds, offset, length);
+            let l =
+                piece_limits(&bounds, length, feed, &limits).map_err(|e| piece_error(e, loc))?;
+            // A period that crosses from one piece into the next uses one jerk: give both
+            // the lower of their jerk limits — unless the path state already moves on the
+            // piece before, whose limits must not change under it (the generator may be
+            // half-way through a ramp planned with them). That drop is met by the scan
+            // (`Planner::scan`) instead.
+            let mut jerk = l.jerk;
+            if let Some(prev) = self.pieces.back_mut()
+                && prev.start > self.state.s
+            {
+                prev.jerk = prev.jerk.min(jerk);
+                jerk = jerk.min(prev.jerk);
+            }
+            self.pieces.push_back(Piece {
+                shape,
+                offset,
+                length,
+                start: self.committed_end,
+                vmax: l.velocity,
+                feed,
+                grip: l.grip,
+                jerk,
+                loc,
+            });
+            self.committed_end += length;
+            if is_element {
+                events_at = self.committed_end;
+            }
+        }
+        for op in front.events {
+            self.markers.push_back(Marker::Event { at: events_at, op });
+        }
+        // Elements a run used up: their events follow the run's blend.
+        for _ in 0..done.consumed {
+            if let Some(w) = self.waiting.pop_front() {
+                for op in w.events {
+                    self.markers.push_back(Marker::Event {
+                        at: self.committed_end,
+                        op,
+                    });
+                }
+            }
+        }
+        if done.stop_at_end && !(flushing && self.waiting.is_empty()) {
+            self.add_stop(self.committed_end);
+        }
+        Ok(())
+    }
+
+    /// A plain standstill at `at`.
+    pub(super) fn add_stop(&mut self, at: f64) {
+        self.markers.push_back(Marker::Stop {
+            at,
+            op: None,
+            dwell: 0.0,
+        });
+    }
+}
