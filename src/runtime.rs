@@ -748,7 +748,15 @@ impl<'a, 'w> Run<'a, 'w> {
         {
             return Err(self.end_path_stop(pending));
         }
-        let result = match self.planner.next_step() {
+        let mut next = self.planner.next_step();
+        while next.is_none() && !self.input_done && self.planner.needs_input() {
+            // The step freed a place in a full planner (a stop reached): it wants more input
+            // before it goes on, which is not the end of the program. Each round takes an op
+            // or ends the input.
+            self.feed_planner();
+            next = self.planner.next_step();
+        }
+        let result = match next {
             None => self.settle_all().map(|()| false),
             Some(Step::Sample(sample)) => self.apply_sample(&sample).map(|()| true),
             // While stopping, events (spindle, stops) of blocks not reached are not executed.
