@@ -14,7 +14,7 @@
 //! position, unit tangent and curvature vector at the midpoint make the split point. The
 //! noise of a fit falls with the square of its span: over 0.5 mm a rounding of 1 µm leaves a
 //! curvature error of a few thousandths per mm. The fitted point may lie off the line by at
-//! most [`SHIFT`] of the tolerance, and the blends through it are checked against the
+//! most a quarter of the tolerance (`SHIFT`), and the blends through it are checked against the
 //! tolerance band like any other blend.
 
 use crate::geom::{Line, Metric, PathPoint};
