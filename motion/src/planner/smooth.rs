@@ -23,6 +23,17 @@ use klar_interp::Pose;
 /// Path distance (mm) the fit reaches on either side of a split point.
 pub const SPAN: f64 = 0.5;
 
+/// Vertices a side the fit takes at least where they lie within [`SPAN_MAX`] (sparser
+/// chords: the span grows until enough rounding errors average out).
+pub const MIN_SIDE: usize = 12;
+
+/// Path distance (mm) the fit reaches at most on either side.
+pub const SPAN_MAX: f64 = 2.0;
+
+/// Largest angle (radians) the polyline may turn between the line and a chord the fit
+/// takes: a quadratic follows a curve closely only while it turns little.
+const FIT_TURN: f64 = 0.15;
+
 /// Vertices a side the fit uses at most, which bounds the work per split point.
 pub const LOOK: usize = 96;
 
@@ -140,7 +151,9 @@ fn side<'a>(
     let mut prev: Option<Pose> = None;
     let mut dir = first_dir;
     let mut s = half;
+    let mut count = 0;
     let cos_max = max_turn.cos();
+    let cos_fit = (0.5 * FIT_TURN).cos();
     vertices.take(LOOK).map_while(move |v| {
         if let Some(p) = prev {
             let mut d = [0.0; 9];
@@ -158,14 +171,20 @@ fn side<'a>(
             s += len;
             dir = d;
         }
-        if s > SPAN && prev.is_some() {
-            return None;
-        }
-        prev = Some(*v);
         let mut off = [0.0; 9];
         for ((o, a), b) in off.iter_mut().zip(&v.0).zip(&centre.0) {
             *o = a - b;
         }
+        if prev.is_some() && s > SPAN {
+            // Beyond the span only while too few vertices were taken, and while the
+            // polyline turns little: the secant from the centre turns by half the curve.
+            let secant = m.dot(&off, &first_dir) / m.norm(&off).max(f64::MIN_POSITIVE);
+            if count >= MIN_SIDE || s > SPAN_MAX || secant < cos_fit {
+                return None;
+            }
+        }
+        count += 1;
+        prev = Some(*v);
         Some((s, off))
     })
 }
