@@ -34,9 +34,12 @@
 //! curved piece leaves √(1 − 0.99²) ≈ 14 % of it ([`CURVE_SHARE`]); the speed generator
 //! uses the grip of the speed it is at. Where only the sum form applies, the curvature term
 //! gets at most half of the acceleration limit at the top speed and the rest is a constant
-//! limit. For the jerk, c₃·V³ gets at most half of the jerk limit and 3·c₂·V·A at most a
-//! quarter (0.6 in quadrature on arcs); J then takes what is left. On a line (c₂ = c₃ = 0)
-//! this is exactly the axis limits projected on the direction.
+//! limit. For the jerk, c₃·V³ gets at most half of the jerk limit and 3·c₂·v·A at most a
+//! quarter (0.6 in quadrature on arcs); J then takes what is left. The cross term holds at
+//! every instant with that instant's speed too, so it caps the product v·A rather than A at
+//! the top speed: the grip allows `A(v) ≤ cross / v`, more acceleration at lower speeds
+//! (speeding up out of a curve, braking into one). On a line (c₂ = c₃ = 0) this is exactly
+//! the axis limits projected on the direction.
 
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, ZERO_LENGTH};
@@ -64,8 +67,8 @@ const CURVE_JERK_SHARE: f64 = 0.5;
 const ARC_JERK_SHARE: f64 = 0.6;
 
 /// The path acceleration a piece allows at each path speed:
-/// `A(v) = min(flat, √(peak² − (bend·v²)²))`. `bend` is 0 where the acceleration does not
-/// depend on the speed (lines, or limits evaluated at the top speed).
+/// `A(v) = min(flat, cross / v, √(peak² − (bend·v²)²))`. `bend` is 0 and `cross` infinite
+/// where the acceleration does not depend on the speed (lines).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Grip {
     /// Limit at every speed.
@@ -74,6 +77,10 @@ pub struct Grip {
     pub peak: f64,
     /// Curvature factor of the speed-dependent part (1/mm).
     pub bend: f64,
+    /// Largest product of speed and acceleration (mm²/s³): on a curve, changing speed at
+    /// speed v with acceleration A costs each axis a jerk 3·|q″|·v·A, which may take only its
+    /// share of the axis's jerk limit.
+    pub cross: f64,
 }
 
 impl Grip {
@@ -84,17 +91,22 @@ impl Grip {
             flat: a,
             peak: f64::INFINITY,
             bend: 0.0,
+            cross: f64::INFINITY,
         }
     }
 
     /// The acceleration at speed `v` (never negative).
     pub fn at(&self, v: f64) -> f64 {
+        let flat = if v > 0.0 {
+            self.flat.min(self.cross / v)
+        } else {
+            self.flat
+        };
         if self.bend <= 0.0 {
-            return self.flat.min(self.peak);
+            return flat.min(self.peak);
         }
         let k = self.bend * v * v;
-        self.flat
-            .min((self.peak * self.peak - k * k).max(0.0).sqrt())
+        flat.min((self.peak * self.peak - k * k).max(0.0).sqrt())
     }
 
     /// The largest acceleration at any speed.
@@ -108,12 +120,16 @@ impl Grip {
             flat: self.flat.min(other.flat),
             peak: self.peak.min(other.peak),
             bend: self.bend.max(other.bend),
+            cross: self.cross.min(other.cross),
         }
     }
 
     /// True when `other` allows less than `self` at some speed.
     pub fn undercut_by(&self, other: &Grip) -> bool {
-        other.flat < self.flat || other.peak < self.peak || other.bend > self.bend
+        other.flat < self.flat
+            || other.peak < self.peak
+            || other.bend > self.bend
+            || other.cross < self.cross
     }
 
     /// The grip scaled by `share` at every speed.
@@ -122,6 +138,7 @@ impl Grip {
             flat: self.flat * share,
             peak: self.peak * share,
             bend: self.bend * share,
+            cross: self.cross * share,
         }
     }
 
@@ -238,11 +255,7 @@ pub fn path_limits(
             v = v.min((CURVE_JERK_SHARE * l.max_jerk / m.c3).cbrt());
         }
     }
-    let mut grip = Grip {
-        flat: f64::INFINITY,
-        peak: f64::INFINITY,
-        bend: 0.0,
-    };
+    let mut grip = Grip::constant(f64::INFINITY);
     for m in axes() {
         let (l, c1, c2, w) = (m.l, m.c1, m.c2, m.wave);
         // The sum form at the top speed, a constant limit.
@@ -270,6 +283,7 @@ pub fn path_limits(
                 flat: f64::INFINITY,
                 peak,
                 bend,
+                cross: f64::INFINITY,
             },
             None => Grip::constant(sum),
         };
@@ -279,19 +293,21 @@ pub fn path_limits(
             } else {
                 1.0 / 12.0
             };
-            axis.flat = axis.flat.min(share * l.max_jerk / (c2 * v));
+            axis.cross = axis.cross.min(share * l.max_jerk / c2);
         }
         grip = grip.min(axis);
     }
-    // The cross term 3·c₂·v·A is largest at the top speed with the largest acceleration.
+    // The cross term 3·c₂·u·A(u) is at most 3·c₂ times the smaller of the top speed times
+    // the largest acceleration and the grip's speed-acceleration product.
     let a = grip.most();
+    let va = (v * a).min(grip.cross);
     let mut j = f64::INFINITY;
     for m in axes() {
         let (l, c1, c2, c3, w) = (m.l, m.c1, m.c2, m.c3, m.wave);
         if c1 <= 0.0 {
             continue;
         }
-        let cross = 3.0 * c2 * v * a;
+        let cross = 3.0 * c2 * va;
         if w > 0.0 {
             // The same construction as for the acceleration.
             let jm = l.max_jerk * (1.0 - (c1 - w) / c1);
@@ -361,6 +377,7 @@ mod tests {
             flat: 900.0,
             peak: 1000.0,
             bend: 0.1,
+            cross: f64::INFINITY,
         };
         assert_eq!(g.at(0.0), 900.0);
         assert_eq!(g.at(200.0), 0.0);
@@ -380,12 +397,14 @@ mod tests {
 
     #[test]
     fn a_constant_grip_combined_with_a_curved_one_is_the_lower_at_every_speed() {
-        // The curved grip keeps its peak in the combination: the result is exactly the
-        // lower of the two at each speed, not a curve below both.
+        // The curved grip keeps its peak and its speed-acceleration product in the
+        // combination: the result is exactly the lower of the two at each speed, not a
+        // curve below both.
         let curved = Grip {
             flat: f64::INFINITY,
             peak: 1000.0,
             bend: 1.0,
+            cross: 20_000.0,
         };
         let flat = Grip::constant(460.0);
         for m in [curved.min(flat), flat.min(curved)] {
