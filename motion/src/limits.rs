@@ -158,7 +158,9 @@ impl Grip {
 pub struct PieceLimits {
     /// Largest path speed.
     pub velocity: f64,
-    /// Largest path acceleration (at low speed: see `grip`).
+    /// Largest path acceleration at low speed, with the speed–acceleration product of the
+    /// grip taken at the top speed (a measure to compare pieces by; the speed generator uses
+    /// `grip`).
     pub acceleration: f64,
     /// Largest path jerk.
     pub jerk: f64,
@@ -318,7 +320,7 @@ pub fn path_limits(
     }
     Ok(PieceLimits {
         velocity: v,
-        acceleration: a,
+        acceleration: if v > 0.0 { a.min(grip.cross / v) } else { a },
         jerk: j,
         grip,
     })
@@ -369,6 +371,39 @@ mod tests {
         // The top speed leaves √(1 − 0.99²) of the limit.
         let top = (CURVE_SHARE * 1000.0 * 5.0f64).sqrt();
         assert!((l.velocity - top).abs() < 1e-9, "{}", l.velocity);
+    }
+
+    #[test]
+    fn a_circle_allows_more_acceleration_the_slower_the_path_goes_round_it() {
+        // Circle r = 5, jerk 2e4: changing speed at v with A costs each axis up to
+        // 3·v·A/r of jerk (in quadrature on an arc), held to 0.6 of the limit, so
+        // v·A ≤ 0.6·2e4·5/3 at every speed, not only at the top one.
+        let from = Pose::xyz(0.0, 0.0, 0.0);
+        let arc = Arc::new(from, from, [5.0, 0.0], Plane::XY, 360.0)
+            .ok()
+            .flatten()
+            .map(Segment::Arc);
+        let Some(arc) = arc else {
+            panic!("a full circle is an arc")
+        };
+        let l = path_limits(&arc.bounds(), arc.length(), &xyz(500.0, 1000.0, 2e4), None);
+        let Ok(l) = l else { panic!("limits") };
+        let product = ARC_JERK_SHARE * 2e4 * 5.0 / 3.0;
+        let mut last = f64::INFINITY;
+        for v in [5.0f64, 10.0, 20.0, 30.0, l.velocity] {
+            let a = l.grip.at(v);
+            let quadrature = (1000.0f64.powi(2) - (v * v / 5.0).powi(2)).sqrt();
+            assert!(v * a <= product * (1.0 + 1e-12), "{v}: {a}");
+            assert!(a <= last && a <= quadrature + 1e-9, "{v}: {a}");
+            // Where neither the product nor the curvature binds, all of it.
+            assert!(
+                (a - (product / v).min(quadrature)).abs() <= 1e-9 * a,
+                "{v}: {a}"
+            );
+            last = a;
+        }
+        // At the top speed less than half of what a third of it allows.
+        assert!(l.grip.at(l.velocity) < 0.5 * l.grip.at(l.velocity / 3.0));
     }
 
     #[test]
