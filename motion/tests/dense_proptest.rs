@@ -1,0 +1,139 @@
+//! Property test for dense code: random smooth curves in short chords with coordinates
+//! rounded as a post-processor prints them, now and then a sharp corner, random limits and
+//! feeds. The path stays within the tolerance of the programmed polyline, every axis within
+//! its limits (finite differences, 1 % slack), and it ends exactly on the last point.
+
+mod common;
+
+use common::*;
+use klar_interp::{Feed, Op, Pose};
+use proptest::prelude::*;
+
+/// A random dense program, described independently of the planner.
+#[derive(Debug, Clone)]
+struct Dense {
+    /// Radius of the base circle (mm).
+    radius: f64,
+    /// Amplitude and wave number of a radial wave on it (a curvature that varies).
+    wave: (f64, f64),
+    /// Chord length (mm).
+    chord: f64,
+    /// Chords in all.
+    chords: usize,
+    /// Rounding step of the coordinates (mm).
+    round: f64,
+    /// Every how many chords the curve turns sharply (0: never).
+    corner_every: usize,
+    /// Feed (mm/s): below the axes' speed limit (a share of it), so that the curve's own
+    /// limits and the feed decide the speed.
+    feed: f64,
+    /// Axis limits: speed, acceleration, jerk.
+    limits: (f64, f64, f64),
+    /// Rise in Z over the whole program (a helix-like curve when not 0).
+    rise: f64,
+}
+
+fn dense_strategy() -> impl Strategy<Value = Dense> {
+    (
+        2.0f64..80.0,
+        (0.0f64..0.3, 1.0f64..6.0),
+        prop_oneof![0.005f64..0.02, 0.02f64..0.1, 0.1f64..0.4],
+        200usize..2500,
+        prop_oneof![Just(1e-3), Just(1e-4), Just(1e-6)],
+        prop_oneof![Just(0usize), 50usize..400],
+        (0.05f64..0.8),
+        (50.0f64..300.0, 300.0f64..3000.0, 5e3f64..2e5),
+        prop_oneof![Just(0.0), -5.0f64..5.0],
+    )
+        .prop_map(
+            |(radius, wave, chord, chords, round, corner_every, share, limits, rise)| Dense {
+                radius,
+                wave,
+                chord,
+                chords,
+                round,
+                corner_every,
+                feed: share * limits.0,
+                limits,
+                rise,
+            },
+        )
+}
+
+/// The program's points: a wavy circle (radius r·(1 + w·sin(k·φ))) walked in chords of
+/// about `chord`, turning back by 90° every `corner_every` chords, rounded.
+fn points(d: &Dense) -> Vec<Pose> {
+    let q = |x: f64| (x / d.round).round() * d.round;
+    let mut pts = Vec::with_capacity(d.chords + 1);
+    let (mut phi, mut heading) = (0.0f64, 0.0f64);
+    let mut at = [0.0f64, 0.0];
+    for k in 0..=d.chords {
+        if k > 0 {
+            let r = d.radius * (1.0 + d.wave.0 * (d.wave.1 * phi).sin());
+            let step = d.chord / r;
+            phi += step;
+            heading += step;
+            if d.corner_every > 0 && k % d.corner_every == 0 {
+                heading += std::f64::consts::FRAC_PI_2;
+            }
+            at[0] += d.chord * heading.cos();
+            at[1] += d.chord * heading.sin();
+        }
+        let z = d.rise * k as f64 / d.chords as f64;
+        pts.push(Pose::xyz(q(at[0]), q(at[1]), q(z)));
+    }
+    pts.dedup_by(|a, b| linear_distance(a, b) == 0.0);
+    pts
+}
+
+/// Distance from `p` to the segment `a`–`b` (X Y Z).
+fn to_segment(p: &Pose, a: &Pose, b: &Pose) -> f64 {
+    let d: Vec<f64> = (0..3).map(|i| b.0[i] - a.0[i]).collect();
+    let w: Vec<f64> = (0..3).map(|i| p.0[i] - a.0[i]).collect();
+    let dd: f64 = d.iter().map(|x| x * x).sum();
+    let t = if dd > 0.0 {
+        (d.iter().zip(&w).map(|(x, y)| x * y).sum::<f64>() / dd).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (0..3)
+        .map(|i| (w[i] - t * d[i]).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+    #[test]
+    #[ignore = "known defect: about 4 % of such programs end with a late stop (the last sample clamped onto the end point, a step in acceleration); run with --ignored"]
+    fn dense_code_stays_in_the_band_and_the_limits_and_ends_exactly(d in dense_strategy()) {
+        let pts = points(&d);
+        prop_assume!(pts.len() > 10);
+        let ops: Vec<Op> = pts
+            .windows(2)
+            .enumerate()
+            .map(|(k, w)| line(k as u32 + 1, w[0], w[1], Feed::Rate(d.feed)))
+            .collect();
+        let (v, a, j) = d.limits;
+        let cfg = config(limits_xyz(v, a, j));
+        let run = run(cfg.clone(), pts[0], ops);
+        assert_within_limits(&cfg, &pts[0], &run.samples, 1.01);
+        let last = run.samples.last().expect("samples");
+        let end = pts[pts.len() - 1];
+        prop_assert!(linear_distance(&last.pose, &end) <= 1e-9, "ends at {:?}", last.pose);
+        // Every sample within the tolerance of the polyline near where the path is: the
+        // nearest chord among those one period's travel (at the feed) can reach from the
+        // last one (the curve may cross itself).
+        let reach = (1.1 * d.feed * cfg.period / d.chord).ceil() as usize + 8;
+        let mut k = 0usize;
+        for s in &run.samples {
+            let from = k.saturating_sub(4);
+            let to = (k + reach).min(pts.len() - 1);
+            let (best, dist) = (from..to)
+                .map(|i| (i, to_segment(&s.pose, &pts[i], &pts[i + 1])))
+                .fold((k, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
+            prop_assert!(dist <= cfg.tolerance + 1e-6, "{dist} mm off the polyline near chord {best}");
+            k = best;
+        }
+    }
+}
