@@ -96,11 +96,12 @@ impl Planner {
             // Likewise a grip below the lowest before it at some speed; the limit keeps the
             // lowest grip so far, which every piece up to the next limit allows.
             if limit < low_speed || low_grip.undercut_by(&p.grip) || (k > 0 && jerk_drops) {
-                // Only a lower acceleration or jerk limit: a soft limit (see `speed::Limit`).
-                // So is the current piece's own: the state is past its start, so the
-                // backward pass must not lower it as if the path stood there; the limits
-                // ahead are met from the state itself.
-                let soft = k == 0 || limit >= low_speed;
+                // Only a lower acceleration or jerk limit, or a speed barely lower: a soft
+                // limit (see `speed::Limit`), met on its own while it is ahead. So is the
+                // current piece's own: the state is past its start, so the backward pass
+                // must not lower it as if the path stood there; the limits ahead are met
+                // from the state itself.
+                let soft = k == 0 || limit >= low_speed * (1.0 - MERGE_SHARE);
                 low_speed = low_speed.min(limit);
                 low_grip = low_grip.min(p.grip);
                 match w.limits.last_mut() {
