@@ -108,11 +108,15 @@ impl Planner {
                     // A limit barely below one just before it (dense code, where the speed
                     // limits of the blends drift down piece by piece) joins that one: its
                     // limits then hold from the earlier place on, which is stricter, and the
-                    // window stays short.
+                    // window stays short. Not a drop in jerk: where the jerk drops decides how
+                    // far a positive acceleration may be eased with the higher jerk before
+                    // it, and moving that place with the current piece would let one period's
+                    // check accept what the next one's refuses.
                     Some(last)
                         if last.at > s
                             && p.start - last.at <= MERGE_DISTANCE
-                            && limit >= last.speed * (1.0 - MERGE_SHARE) =>
+                            && limit >= last.speed * (1.0 - MERGE_SHARE)
+                            && p.jerk >= last.jerk =>
                     {
                         last.speed = last.speed.min(limit);
                         last.soft &= soft;

@@ -171,8 +171,9 @@ fn easing_distance(x: &Motion, limit: f64, jerk: f64) -> f64 {
 
 /// The jerk with which `x` may bring a positive acceleration down to zero on its way to
 /// limit `l` ahead: the window's jerk when that is higher than the limit's and the easing
-/// ends before the nearest limit ahead (where the jerk may drop: a piece with a lower jerk
-/// than the current one is always a limit). `None` when the limit's own jerk applies.
+/// ends before the nearest limit ahead with a lower jerk (where the jerk drops: a piece with
+/// a lower jerk than the current one is always a limit of its own). `None` when the limit's
+/// own jerk applies.
 ///
 /// A ramp that eased with the lower jerk of a limit far ahead would reach a speed above the
 /// current piece's limit first: the checks would then ask for a braking the current limit
@@ -181,7 +182,11 @@ fn easing_for(x: &Motion, l: &Limit, w: &Window) -> Option<f64> {
     if x.a <= 0.0 || l.at <= x.s || w.jerk <= l.jerk {
         return None;
     }
-    let nearest = w.limits.iter().find(|m| m.at > x.s).map_or(l.at, |m| m.at);
+    let nearest = w
+        .limits
+        .iter()
+        .find(|m| m.at > x.s && m.jerk < w.jerk)
+        .map_or(l.at, |m| m.at);
     (x.s + easing_distance(x, 0.0, JUDGE * w.jerk) <= nearest).then_some(w.jerk)
 }
 
