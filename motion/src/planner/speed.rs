@@ -380,9 +380,10 @@ pub fn check(x: &Motion, w: &Window) -> bool {
 /// A ramp towards a speed: (target, acceleration limit, jerk limit).
 type Action = (f64, f64, f64);
 
-/// The ramps for the limits that `x` misses, the worst first (the largest ratio of
-/// distance needed to distance left); empty when it misses none.
-fn bindings(x: &Motion, w: &Window) -> Vec<Action> {
+/// The ramps from state `from` for the limits that `x` misses (`from` itself, or where the
+/// plain action from it would lead), the worst first (the largest ratio of distance needed
+/// to distance left); empty when it misses none.
+fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
     let mut found: Vec<(Action, f64)> = Vec::new();
     for (l, too_fast, too_hard) in relevant(x, w) {
         let urgency = if too_fast > 0.0 { too_fast } else { too_hard };
@@ -395,7 +396,11 @@ fn bindings(x: &Motion, w: &Window) -> Vec<Action> {
         // missed. Easing the acceleration uses the current piece's jerk (at least the
         // limit's), which eases no later than the check assumes.
         let ramp = if too_fast > 0.0 {
-            let jerk = easing_for(x, l, w).unwrap_or(l.jerk.min(w.jerk));
+            // The ramp starts from `from`: where the check there let a positive
+            // acceleration be eased with the window's jerk, the ramp eases with it too.
+            let jerk = easing_for(from, l, w)
+                .or_else(|| easing_for(x, l, w))
+                .unwrap_or(l.jerk.min(w.jerk));
             (l.speed, l.grip.min(w.grip).at(peak_speed(x, jerk)), jerk)
         } else {
             let accel = arrival_accel(x, l).min(w.grip.at(peak_speed(x, w.jerk)));
@@ -464,8 +469,8 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     // towards those the go ramp would miss, then a stop. The first whose result is safe
     // bounds a bisection for the highest safe speed between it and the go target: the
     // ramp rides the braking curve in front of the binding limit.
-    let mut candidates = bindings(x, w);
-    candidates.extend(bindings(&go, w));
+    let mut candidates = bindings(x, x, w);
+    candidates.extend(bindings(x, &go, w));
     let easing = w.easing_jerk(x.s);
     candidates.push((0.0, w.grip.at(peak_speed(x, easing)), easing));
     let mut fallback = None;
