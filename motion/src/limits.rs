@@ -351,9 +351,9 @@ mod tests {
         ]
     }
 
-    #[test]
-    fn a_full_circle_leaves_the_acceleration_the_curvature_does_not_take() {
-        // Circle r = 5 in XY: per axis √(A² + (v²/r)²) ≤ a, so A(v) = √(a² − (v²/r)²).
+    /// Limits of a full circle r = 5 in XY (centre at X+5) on axes of 500 mm/s, 1000 mm/s²
+    /// and jerk `jerk`.
+    fn circle_r5_limits(jerk: f64) -> PieceLimits {
         let from = Pose::xyz(0.0, 0.0, 0.0);
         let arc = Arc::new(from, from, [5.0, 0.0], Plane::XY, 360.0)
             .ok()
@@ -362,8 +362,15 @@ mod tests {
         let Some(arc) = arc else {
             panic!("a full circle is an arc")
         };
-        let l = path_limits(&arc.bounds(), arc.length(), &xyz(500.0, 1000.0, 1e9), None);
+        let l = path_limits(&arc.bounds(), arc.length(), &xyz(500.0, 1000.0, jerk), None);
         let Ok(l) = l else { panic!("limits") };
+        l
+    }
+
+    #[test]
+    fn a_full_circle_leaves_the_acceleration_the_curvature_does_not_take() {
+        // Circle r = 5 in XY: per axis √(A² + (v²/r)²) ≤ a, so A(v) = √(a² − (v²/r)²).
+        let l = circle_r5_limits(1e9);
         for v in [0.0f64, 20.0, 50.0, 65.0] {
             let want = (1000.0f64.powi(2) - (v * v / 5.0).powi(2)).sqrt();
             assert!((l.grip.at(v) - want).abs() <= 1e-6 * want, "{v}");
@@ -378,16 +385,7 @@ mod tests {
         // Circle r = 5, jerk 2e4: changing speed at v with A costs each axis up to
         // 3·v·A/r of jerk (in quadrature on an arc), held to 0.6 of the limit, so
         // v·A ≤ 0.6·2e4·5/3 at every speed, not only at the top one.
-        let from = Pose::xyz(0.0, 0.0, 0.0);
-        let arc = Arc::new(from, from, [5.0, 0.0], Plane::XY, 360.0)
-            .ok()
-            .flatten()
-            .map(Segment::Arc);
-        let Some(arc) = arc else {
-            panic!("a full circle is an arc")
-        };
-        let l = path_limits(&arc.bounds(), arc.length(), &xyz(500.0, 1000.0, 2e4), None);
-        let Ok(l) = l else { panic!("limits") };
+        let l = circle_r5_limits(2e4);
         let product = ARC_JERK_SHARE * 2e4 * 5.0 / 3.0;
         let mut last = f64::INFINITY;
         for v in [5.0f64, 10.0, 20.0, 30.0, l.velocity] {

@@ -5,7 +5,7 @@
 use super::path::{Committed, Element, Piece, Shape, Vertices, commit, piece_limits};
 use super::{Marker, Planner, path, piece_error, smooth};
 use crate::error::MotionError;
-use crate::geom::{Metric, Segment};
+use crate::geom::Metric;
 
 /// Elements kept back at most: more wait while the lines after the next corner but one
 /// are shorter than a run of dense code and the split-point fit at its end reach
@@ -31,7 +31,7 @@ impl Planner {
         let mut before: Option<&Element> = self.waiting.get(1).map(|w| &w.element);
         for w in self.waiting.iter().skip(2) {
             let e = &w.element;
-            if !matches!(e.segment, Segment::Line(_)) || e.segment.metric() != Metric::Linear {
+            if !e.is_linear_line() {
                 return true;
             }
             // A corner sharper than a split point allows ends any run before it.
@@ -55,13 +55,10 @@ impl Planner {
     /// after anything but a linear line), then the ends of the linear lines waiting after
     /// it; returns the index of the front element's end.
     fn gather_vertices(&mut self, front: &Element) -> usize {
-        let linear = |e: &Element| {
-            matches!(e.segment, Segment::Line(_)) && e.segment.metric() == Metric::Linear
-        };
         let v = &mut self.vertices;
-        if !linear(front) || v.last() != Some(&front.segment.start()) {
+        if !front.is_linear_line() || v.last() != Some(&front.segment.start()) {
             v.clear();
-            if linear(front) {
+            if front.is_linear_line() {
                 v.push(front.segment.start());
             }
         }
@@ -71,7 +68,7 @@ impl Planner {
         }
         let first = v.len() - 1;
         for w in &self.waiting {
-            if !linear(&w.element) {
+            if !w.element.is_linear_line() {
                 break;
             }
             v.push(w.element.segment.end());

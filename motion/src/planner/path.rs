@@ -213,6 +213,14 @@ impl<'a> Vertices<'a> {
     }
 }
 
+impl Element {
+    /// True for a line measured over the linear axes (the polyline of dense code, whose
+    /// vertices the split-point fit takes).
+    pub fn is_linear_line(&self) -> bool {
+        matches!(self.segment, Segment::Line(_)) && self.segment.metric() == Metric::Linear
+    }
+}
+
 /// A new piece: its shape, where on the shape it starts, its length, feed and block.
 pub type NewPiece = (Shape, f64, f64, Option<f64>, SourceLoc);
 
@@ -478,7 +486,7 @@ fn split_for(
     let lm = mid.segment.length();
     let tn = next.segment.point(0.0).d1;
     let worst = turn.max(angle(tm, &tn));
-    if worst > SPLIT_MAX_ANGLE || lm * worst > 2.0 * tol || tol.min(next.tolerance) <= 0.0 {
+    if !gentle(lm, worst, tol) || tol.min(next.tolerance) <= 0.0 {
         return None;
     }
     split_point(line, stencil, tol, SPLIT_MAX_ANGLE)
@@ -613,8 +621,14 @@ pub const RUN_ELEMENTS: usize = 64;
 /// True for a line that moves linear axes only (runs leave rotary moves, whose limits
 /// depend on the machine's kinematics along the way, to blends between neighbours).
 fn linear_only(e: &Element) -> bool {
-    matches!(&e.segment, Segment::Line(l) if Metric::Rotary.norm(&l.point(0.0).d1) == 0.0)
-        && e.segment.metric() == Metric::Linear
+    e.is_linear_line() && Metric::Rotary.norm(&e.segment.point(0.0).d1) == 0.0
+}
+
+/// True when a line of length `len` whose ends turn by at most `turn` (radians) may lie
+/// inside a blend through split points in tolerance `tol`: a gentle turn, and the line's
+/// sagitta-like offset `len·turn` within twice the tolerance.
+fn gentle(len: f64, turn: f64, tol: f64) -> bool {
+    turn <= SPLIT_MAX_ANGLE && len * turn <= 2.0 * tol
 }
 
 /// The lower of two feeds (`None`: rapid, the higher of any).
@@ -664,8 +678,7 @@ fn try_run(
         };
         let turn = angle(&prev, &dir).max(angle(&dir, &after.segment.point(0.0).d1));
         if after.segment.metric() != Metric::Linear
-            || turn > SPLIT_MAX_ANGLE
-            || lj * turn > 2.0 * t
+            || !gentle(lj, turn, t)
             || t.min(after.tolerance) <= 0.0
             || reach + 0.5 * lj > RUN_LENGTH
         {

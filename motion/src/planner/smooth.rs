@@ -295,16 +295,9 @@ mod tests {
         Pose::xyz(q(r * phi.cos()), q(r * phi.sin()), 0.0)
     }
 
-    #[test]
-    fn a_rounded_circle_gives_its_curvature_tangent_and_radius_back() {
-        // R25 in 0.01 mm chords rounded to 1 µm: each chord's direction is off by up to
-        // 0.1 rad. The fit over 2 × 50 vertices within 0.5 mm has a curvature error of
-        // σ ≈ 0.29 µm · 2 / (√100 · 0.5² · 0.3) ≈ 0.8e-3 per mm; 3σ allowed.
-        let (r, step) = (25.0, 0.01 / 25.0);
-        let pts: Vec<Pose> = (-80..=80)
-            .map(|k| on_circle(r, k as f64 * step, 1e-3))
-            .collect();
-        let mid = 80;
+    /// The split point of the chord from `pts[mid]` to `pts[mid + 1]` with all of `pts`
+    /// around it (tolerance 0.01 mm, turns up to 0.3 rad).
+    fn split_at(pts: &[Pose], mid: usize) -> PathPoint {
         let Ok(Some(line)) = Line::new(pts[mid], pts[mid + 1]) else {
             panic!("a chord is a line")
         };
@@ -315,6 +308,20 @@ mod tests {
         let Some(p) = split_point(&line, &stencil, 0.01, 0.3) else {
             panic!("a split point")
         };
+        p
+    }
+
+    #[test]
+    fn a_rounded_circle_gives_its_curvature_tangent_and_radius_back() {
+        // R25 in 0.01 mm chords rounded to 1 µm: each chord's direction is off by up to
+        // 0.1 rad. The fit over 2 × 50 vertices within 0.5 mm has a curvature error of
+        // σ ≈ 0.29 µm · 2 / (√100 · 0.5² · 0.3) ≈ 0.8e-3 per mm; 3σ allowed.
+        let (r, step) = (25.0, 0.01 / 25.0);
+        let pts: Vec<Pose> = (-80..=80)
+            .map(|k| on_circle(r, k as f64 * step, 1e-3))
+            .collect();
+        let mid = 80;
+        let p = split_at(&pts, mid);
         let m = Metric::Linear;
         let kappa = m.norm(&p.d2);
         assert!((kappa - 1.0 / r).abs() < 2.5e-3, "curvature {kappa}");
@@ -336,16 +343,7 @@ mod tests {
             .collect();
         pts.extend((1..=30).map(|k| Pose::xyz(0.05, k as f64 * 0.01, 0.0)));
         let mid = 30;
-        let Ok(Some(line)) = Line::new(pts[mid], pts[mid + 1]) else {
-            panic!("a chord is a line")
-        };
-        let stencil = Stencil {
-            behind: &pts[..=mid],
-            ahead: &pts[mid + 1..],
-        };
-        let Some(p) = split_point(&line, &stencil, 0.01, 0.3) else {
-            panic!("a split point")
-        };
+        let p = split_at(&pts, mid);
         assert!(Metric::Linear.norm(&p.d2) < 1e-9);
         assert!(p.pose.0[1].abs() < 1e-12 && (p.d1[0] - 1.0).abs() < 1e-12);
     }

@@ -286,34 +286,29 @@ fn settled(here: &Limit, next: &Limit) -> f64 {
     }
     // With the grip of the highest speed the closed form is on the safe side.
     let fast = braking_speed(next.speed, room, grip.at(here.speed), jerk);
-    let (mut lo, mut hi) = (next.speed, fast.min(here.speed));
+    let hi = fast.min(here.speed);
+    // The highest speed in [lo, hi] whose braking fits, by bisection.
+    let highest = |mut lo: f64, mut hi: f64, steps: usize| {
+        for _ in 0..steps {
+            let mid = 0.5 * (lo + hi);
+            if brake(mid) <= room {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
+    };
     let varies = grip.at(next.speed) > grip.at(here.speed) * (1.0 + GRIP_CHANGE);
     if varies && brake(hi) <= room {
-        // The grip grows as the speed falls: find the highest speed by bisection.
-        lo = hi;
-        hi = here.speed;
-        for _ in 0..30 {
-            let mid = 0.5 * (lo + hi);
-            if brake(mid) <= room {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        hi = lo;
+        // The grip grows as the speed falls: search above the closed form.
+        highest(hi, here.speed, 30)
     } else if brake(hi) > room {
         // Rounding put the closed form a hair too high: settle it by bisection.
-        for _ in 0..40 {
-            let mid = 0.5 * (lo + hi);
-            if brake(mid) <= room {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        hi = lo;
+        highest(next.speed, hi, 40)
+    } else {
+        hi
     }
-    hi
 }
 
 /// The highest speed from which a jerk-limited ramp (starting and ending with zero
