@@ -333,24 +333,34 @@ pub fn braking_speed(target: f64, room: f64, accel: f64, jerk: f64) -> f64 {
 
 /// The limits that bind state `x`, each with how far it misses them (see [`misses`]).
 ///
-/// Limits the state stands in are always checked. Of the limits ahead, the nearest that is
-/// not soft stands for the speed limits of all further ones (after [`settle`]); when the state must slow
-/// down for it, its ramp ends with zero acceleration there, so it stands for the
+/// Limits the state stands in are always checked. A limit ahead is judged with the lowest
+/// acceleration and jerk limits of all pieces between the state and it (its own cover only
+/// the pieces since the limit before it). Once the state must slow down for a limit that is
+/// not soft, that limit stands for all further ones: after [`settle`] its speed lets the path
+/// meet them, and its ramp ends with zero acceleration there, so it stands for the
 /// acceleration limits further on too. Checking those further ones with their own (lower)
 /// jerk would judge a state on the nearest limit's braking curve unsafe although following
-/// that curve meets them all: the checks would contradict the actions.
-fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (&'a Limit, f64, f64)> {
-    let mut ahead = false;
+/// that curve meets them all: the checks would contradict the actions. A limit the state
+/// need not slow down for stands for nothing: [`settle`] vouches for the limits after it
+/// only from a state that reaches it without speeding up, and a state below its speed may
+/// still be speeding up when it gets there.
+fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (Limit, f64, f64)> + 'a {
     let mut covered = false;
+    let (mut grip, mut jerk) = (Grip::constant(f64::INFINITY), f64::INFINITY);
     w.limits.iter().filter_map(move |l| {
         if covered {
             return None;
         }
-        let (fast, hard) = misses(x, l, w);
-        let fast = if ahead { 0.0 } else { fast };
-        if l.at > x.s && !ahead && !l.soft {
-            ahead = true;
-            covered = slows_for(x, l);
+        let mut l = *l;
+        if l.at > x.s {
+            grip = grip.min(l.grip);
+            jerk = jerk.min(l.jerk);
+            l.grip = grip;
+            l.jerk = jerk;
+        }
+        let (fast, hard) = misses(x, &l, w);
+        if l.at > x.s && !l.soft {
+            covered = slows_for(x, &l);
         }
         Some((l, fast, hard))
     })
@@ -381,6 +391,7 @@ type Action = (f64, f64, f64);
 fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
     let mut found: Vec<(Action, f64)> = Vec::new();
     for (l, too_fast, too_hard) in relevant(x, w) {
+        let l = &l;
         let urgency = if too_fast > 0.0 { too_fast } else { too_hard };
         if urgency <= 0.0 {
             continue;
@@ -500,6 +511,52 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A hard limit at `at` with speed `speed` and the same grip and jerk everywhere.
+    fn limit(at: f64, speed: f64) -> Limit {
+        let grip = Grip::constant(1000.0);
+        Limit {
+            at,
+            speed,
+            grip_after: grip,
+            grip,
+            jerk: 1e5,
+            soft: false,
+        }
+    }
+
+    #[test]
+    fn a_limit_passed_while_speeding_up_does_not_vouch_for_a_stop_behind_it() {
+        // A limit 0.5 mm ahead, settled against a stop 7 mm ahead, and a state still
+        // speeding up below the settled speed: it passes the limit with a positive
+        // acceleration, where the settled speed vouches for nothing.
+        let mut w = Window {
+            limits: vec![limit(0.5, 150.0), limit(7.0, 0.0)],
+            grip: Grip::constant(1000.0),
+            jerk: 1e5,
+        };
+        settle(&mut w.limits);
+        let x = Motion {
+            s: 0.0,
+            v: 100.0,
+            a: 1000.0,
+        };
+        let first = w.limits[0];
+        assert!(first.speed < 150.0, "settled: {}", first.speed);
+        assert!(
+            !slows_for(&x, &first),
+            "the state need not slow down for it"
+        );
+        // No motion within the limits stops the state in time: the time-optimal stop from
+        // it (ease the acceleration, then brake) is longer than the way to the stop.
+        let stop = Ramp::new(x.v, x.a, 0.0, 1000.0, 1e5).distance();
+        assert!(stop > 7.0, "{stop}");
+        assert!(!check(&x, &w));
+        // The same state a little slower is safe.
+        let slower = Motion { v: 80.0, ..x };
+        assert!(Ramp::new(slower.v, slower.a, 0.0, 1000.0, 1e5).distance() < 6.5);
+        assert!(check(&slower, &w));
+    }
 
     #[test]
     fn braking_speed_is_where_the_ramp_fills_the_room() {
