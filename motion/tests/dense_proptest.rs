@@ -102,38 +102,90 @@ fn to_segment(p: &Pose, a: &Pose, b: &Pose) -> f64 {
         .sqrt()
 }
 
+/// Runs `d` and checks the samples: within the axis limits (1 % slack), within the
+/// tolerance of the polyline, ending exactly on its last point.
+fn check_dense(d: &Dense) -> Result<(), TestCaseError> {
+    let pts = points(d);
+    prop_assume!(pts.len() > 10);
+    let ops: Vec<Op> = pts
+        .windows(2)
+        .enumerate()
+        .map(|(k, w)| line(k as u32 + 1, w[0], w[1], Feed::Rate(d.feed)))
+        .collect();
+    let (v, a, j) = d.limits;
+    let cfg = config(limits_xyz(v, a, j));
+    let run = run(cfg.clone(), pts[0], ops);
+    assert_within_limits(&cfg, &pts[0], &run.samples, 1.01);
+    let last = run.samples.last().expect("samples");
+    let end = pts[pts.len() - 1];
+    prop_assert!(
+        linear_distance(&last.pose, &end) <= 1e-9,
+        "ends at {:?}",
+        last.pose
+    );
+    // Every sample within the tolerance of the polyline near where the path is: the
+    // nearest chord among those one period's travel (at the feed) can reach from the
+    // last one (the curve may cross itself).
+    let reach = (1.1 * d.feed * cfg.period / d.chord).ceil() as usize + 8;
+    let mut k = 0usize;
+    for s in &run.samples {
+        let from = k.saturating_sub(4);
+        let to = (k + reach).min(pts.len() - 1);
+        let (best, dist) = (from..to)
+            .map(|i| (i, to_segment(&s.pose, &pts[i], &pts[i + 1])))
+            .fold((k, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
+        prop_assert!(
+            dist <= cfg.tolerance + 1e-6,
+            "{dist} mm off the polyline near chord {best}"
+        );
+        k = best;
+    }
+    Ok(())
+}
+
+/// A wave on an R61.7 circle in 0.056 mm chords rounded to 1 µm, turning by 90° every 330
+/// chords: the path sped up past a limit below the feed while braking was already due
+/// for the stop at a corner behind it, and came to that stop 17 µm late.
+#[test]
+fn a_stop_behind_a_limit_passed_while_speeding_up_is_met() {
+    let d = Dense {
+        radius: 61.74933444004471,
+        wave: (0.20465218032954327, 1.4037864411151797),
+        chord: 0.056150680552710844,
+        chords: 2178,
+        round: 1e-3,
+        corner_every: 330,
+        feed: 157.55663479439542,
+        limits: (257.81248534603805, 1272.3965890980344, 87100.46479903525),
+        rise: 0.0,
+    };
+    check_dense(&d).expect("within the limits");
+}
+
+/// A wavy helix at twice the speed its axes allow, turning towards Y piece by piece: each
+/// chord's limit lies less than 1 % below the one before, and Y ran 16 % over its speed
+/// limit when such drifts were met one by one.
+#[test]
+fn limits_that_drift_down_piece_by_piece_are_met_as_one_drop() {
+    let d = Dense {
+        radius: 53.06535771774638,
+        wave: (0.2809871097343579, 1.5933403735231297),
+        chord: 0.1650731956526395,
+        chords: 2277,
+        round: 1e-6,
+        corner_every: 0,
+        feed: 403.0874464628135,
+        limits: (209.75679908986623, 1377.9813573101528, 122899.06280688435),
+        rise: 3.401951554819407,
+    };
+    check_dense(&d).expect("within the limits");
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
     #[test]
-    #[ignore = "known defect: about 2 % of such programs end with a late stop (the last sample clamped onto the end point, a step in acceleration); run with --ignored"]
+    #[ignore = "known defect: now and then a late stop at the end of curved code on machines with a low jerk limit (the last sample clamped onto the end point, a step in acceleration); run with --ignored"]
     fn dense_code_stays_in_the_band_and_the_limits_and_ends_exactly(d in dense_strategy()) {
-        let pts = points(&d);
-        prop_assume!(pts.len() > 10);
-        let ops: Vec<Op> = pts
-            .windows(2)
-            .enumerate()
-            .map(|(k, w)| line(k as u32 + 1, w[0], w[1], Feed::Rate(d.feed)))
-            .collect();
-        let (v, a, j) = d.limits;
-        let cfg = config(limits_xyz(v, a, j));
-        let run = run(cfg.clone(), pts[0], ops);
-        assert_within_limits(&cfg, &pts[0], &run.samples, 1.01);
-        let last = run.samples.last().expect("samples");
-        let end = pts[pts.len() - 1];
-        prop_assert!(linear_distance(&last.pose, &end) <= 1e-9, "ends at {:?}", last.pose);
-        // Every sample within the tolerance of the polyline near where the path is: the
-        // nearest chord among those one period's travel (at the feed) can reach from the
-        // last one (the curve may cross itself).
-        let reach = (1.1 * d.feed * cfg.period / d.chord).ceil() as usize + 8;
-        let mut k = 0usize;
-        for s in &run.samples {
-            let from = k.saturating_sub(4);
-            let to = (k + reach).min(pts.len() - 1);
-            let (best, dist) = (from..to)
-                .map(|i| (i, to_segment(&s.pose, &pts[i], &pts[i + 1])))
-                .fold((k, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
-            prop_assert!(dist <= cfg.tolerance + 1e-6, "{dist} mm off the polyline near chord {best}");
-            k = best;
-        }
+        check_dense(&d)?;
     }
 }

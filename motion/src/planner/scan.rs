@@ -67,6 +67,8 @@ impl Planner {
         let (mut pre_grip, mut pre_jerk) = (none, f64::INFINITY);
         let (mut low_speed, mut low_grip) = (f64::INFINITY, none);
         let mut low_jerk = f64::INFINITY;
+        // Speed of the last limit that is not soft.
+        let mut anchor = f64::INFINITY;
         // Path distance the next period can reach: a piece starting within it shares its
         // jerk limit with the current one for that period.
         let next_reach = s
@@ -101,7 +103,13 @@ impl Planner {
                 // current piece's own: the state is past its start, so the backward pass
                 // must not lower it as if the path stood there; the limits ahead are met
                 // from the state itself.
-                let soft = k == 0 || limit >= low_speed * (1.0 - MERGE_SHARE);
+                // Barely lower than the last limit that is not soft (the current piece's at
+                // first), not than the one just before: limits that drift down piece by
+                // piece add up to a real drop, which the backward pass must see.
+                let soft = k == 0 || limit >= anchor * (1.0 - MERGE_SHARE);
+                if !soft || k == 0 {
+                    anchor = limit;
+                }
                 low_speed = low_speed.min(limit);
                 low_grip = low_grip.min(p.grip);
                 match w.limits.last_mut() {
