@@ -130,7 +130,13 @@ impl Planner {
                 prev.jerk = prev.jerk.min(jerk);
                 jerk = jerk.min(prev.jerk);
             }
+            let limit = match feed {
+                Some(f) => l.velocity.min(f),
+                None => l.velocity,
+            };
+            let drop = self.drops.next(limit);
             self.pieces.push_back(Piece {
+                drop,
                 shape,
                 offset,
                 length,

@@ -22,6 +22,7 @@
 //! the path.
 
 mod commit;
+mod drops;
 pub mod path;
 mod scan;
 pub mod smooth;
@@ -114,6 +115,8 @@ pub struct Planner {
     markers: VecDeque<Marker>,
     /// End of the committed path.
     committed_end: f64,
+    /// Which committed speed limits are steps down.
+    drops: drops::DropTracker,
     /// End pose of everything pushed so far.
     planned_pose: Pose,
     /// Pose and block where the machine stands when no piece is left.
@@ -172,6 +175,7 @@ impl Planner {
             pieces: VecDeque::new(),
             markers: VecDeque::new(),
             committed_end: 0.0,
+            drops: drops::DropTracker::default(),
             planned_pose: start,
             rest_pose: start,
             rest_loc: SourceLoc::default(),

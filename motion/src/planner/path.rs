@@ -128,6 +128,11 @@ pub struct Piece {
     pub jerk: f64,
     /// The block it comes from.
     pub loc: SourceLoc,
+    /// True when its speed limit lies a real step below the pieces before it (see
+    /// `planner::drops`): a limit the backward pass settles, not a soft one.
+    /// Decided once, as the piece is committed, so that it does not depend on the piece the
+    /// state is on.
+    pub drop: bool,
 }
 
 impl Piece {

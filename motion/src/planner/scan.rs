@@ -67,8 +67,6 @@ impl Planner {
         let (mut pre_grip, mut pre_jerk) = (none, f64::INFINITY);
         let (mut low_speed, mut low_grip) = (f64::INFINITY, none);
         let mut low_jerk = f64::INFINITY;
-        // Speed of the last limit that is not soft.
-        let mut anchor = f64::INFINITY;
         // Path distance the next period can reach: a piece starting within it shares its
         // jerk limit with the current one for that period.
         let next_reach = s
@@ -98,18 +96,13 @@ impl Planner {
             // Likewise a grip below the lowest before it at some speed; the limit keeps the
             // lowest grip so far, which every piece up to the next limit allows.
             if limit < low_speed || low_grip.undercut_by(&p.grip) || (k > 0 && jerk_drops) {
-                // Only a lower acceleration or jerk limit, or a speed barely lower: a soft
-                // limit (see `speed::Limit`), met on its own while it is ahead. So is the
-                // current piece's own: the state is past its start, so the backward pass
-                // must not lower it as if the path stood there; the limits ahead are met
-                // from the state itself.
-                // Barely lower than the last limit that is not soft (the current piece's at
-                // first), not than the one just before: limits that drift down piece by
-                // piece add up to a real drop, which the backward pass must see.
-                let soft = k == 0 || limit >= anchor * (1.0 - MERGE_SHARE);
-                if !soft || k == 0 {
-                    anchor = limit;
-                }
+                // Only a lower acceleration or jerk limit, or a speed that is no step down
+                // (`Piece::drop`, decided as the piece was committed): a soft limit (see
+                // `speed::Limit`), met on its own while it is ahead. So is the current
+                // piece's own: the state is past its start, so the backward pass must not
+                // lower it as if the path stood there; the limits ahead are met from the
+                // state itself.
+                let soft = k == 0 || !p.drop;
                 low_speed = low_speed.min(limit);
                 low_grip = low_grip.min(p.grip);
                 match w.limits.last_mut() {
