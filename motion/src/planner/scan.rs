@@ -103,8 +103,15 @@ impl Planner {
                 // lower it as if the path stood there; the limits ahead are met from the
                 // state itself.
                 let soft = k == 0 || !p.drop;
-                low_speed = low_speed.min(limit);
-                low_grip = low_grip.min(p.grip);
+                // The running minima start after the current piece: the state is on it
+                // already, and a piece ahead with a higher limit than the current one may
+                // still be a step down from the pieces around it, settled lower by those
+                // after it. Left out while the state is on a slower piece, it would turn up
+                // as a limit below the state's braking curve as soon as the state moved on.
+                if k > 0 {
+                    low_speed = low_speed.min(limit);
+                    low_grip = low_grip.min(p.grip);
+                }
                 match w.limits.last_mut() {
                     // A limit barely below one just before it (dense code, where the speed
                     // limits of the blends drift down piece by piece) joins that one: its
