@@ -130,13 +130,8 @@ impl Planner {
                 prev.jerk = prev.jerk.min(jerk);
                 jerk = jerk.min(prev.jerk);
             }
-            let limit = match feed {
-                Some(f) => l.velocity.min(f),
-                None => l.velocity,
-            };
-            let drop = self.drops.next(limit);
-            self.pieces.push_back(Piece {
-                drop,
+            let mut piece = Piece {
+                drop: false,
                 shape,
                 offset,
                 length,
@@ -146,7 +141,9 @@ impl Planner {
                 grip: l.grip,
                 jerk,
                 loc,
-            });
+            };
+            piece.drop = self.drops.next(piece.speed_limit(1.0));
+            self.pieces.push_back(piece);
             self.committed_end += length;
             if is_element {
                 events_at = self.committed_end;

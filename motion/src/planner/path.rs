@@ -128,8 +128,8 @@ pub struct Piece {
     pub jerk: f64,
     /// The block it comes from.
     pub loc: SourceLoc,
-    /// True when its speed limit lies a real step below the pieces before it (see
-    /// `planner::drops`): a limit the backward pass settles, not a soft one.
+    /// True when its speed limit at the programmed feed lies a real step below the pieces
+    /// before it (see `planner::drops`): a limit the backward pass settles, not a soft one.
     /// Decided once, as the piece is committed, so that it does not depend on the piece the
     /// state is on.
     pub drop: bool,

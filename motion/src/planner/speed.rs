@@ -390,8 +390,8 @@ type Action = (f64, f64, f64);
 /// to distance left); empty when it misses none.
 fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
     let mut found: Vec<(Action, f64)> = Vec::new();
-    for (l, too_fast, too_hard) in relevant(x, w) {
-        let l = &l;
+    for (limit, too_fast, too_hard) in relevant(x, w) {
+        let l = &limit;
         let urgency = if too_fast > 0.0 { too_fast } else { too_hard };
         if urgency <= 0.0 {
             continue;
