@@ -180,3 +180,26 @@ fn a_blend_is_planned_in_parts_so_the_path_slows_down_inside_it() {
         v[k]
     );
 }
+
+#[test]
+fn a_long_line_after_a_blend_keeps_its_own_jerk_limit() {
+    // The blend out of the arc allows less jerk than the line x = 10 after it. The two
+    // share the lower limit only near their joint: speeding up along the line, the Y axis
+    // reaches its own jerk limit once the path is clear of the blend (y ≥ 1.78).
+    let jerk = 1e5;
+    let (_, out) = line_into_arc(jerk);
+    let ys: Vec<f64> = out
+        .samples
+        .iter()
+        .filter(|s| s.pose.0[1] > 2.0 && (s.pose.0[0] - 10.0).abs() < 1e-12)
+        .map(|s| s.pose.0[1])
+        .collect();
+    let highest = ys
+        .windows(4)
+        .map(|w| (w[3] - 3.0 * w[2] + 3.0 * w[1] - w[0]).abs() / 1e-9)
+        .fold(0.0, f64::max);
+    assert!(
+        highest > 0.95 * jerk && highest <= 1.01 * jerk,
+        "largest Y jerk on the line after the blend: {highest} mm/s³"
+    );
+}

@@ -19,6 +19,23 @@ const VERTICES_BEHIND: usize = smooth::LOOK;
 /// element's corner be decided: a run and the fit at its end.
 const AHEAD_REACH: f64 = path::RUN_LENGTH + smooth::SPAN;
 
+/// Periods of travel at a piece's top speed over which it shares a lower jerk limit with its
+/// neighbour when it is long enough to be cut ([`Planner::push_piece`]).
+const SHARED_PERIODS: f64 = 2.0;
+
+/// The stretch of `piece` next to a neighbour with a lower jerk limit that takes that
+/// limit, when the piece is an element more than twice that long (a blend keeps its parts'
+/// own bounds, so it is never cut).
+fn shared_stretch(piece: &Piece, period: f64) -> Option<f64> {
+    if !matches!(piece.shape, Shape::Element(_)) {
+        return None;
+    }
+    let reach =
+        piece.vmax * period + piece.grip.most() * period * period + piece.jerk * period.powi(3);
+    let stretch = SHARED_PERIODS * reach;
+    (stretch.is_finite() && piece.length > 2.0 * stretch).then_some(stretch)
+}
+
 impl Planner {
     /// True when enough elements wait for the front one's corner (and the split point
     /// after it) to be decided: the lines after the next corner but one reach as far as a
@@ -118,18 +135,6 @@ impl Planner {
             let limits = self.limits_for(&shape, &bounds, offset, length);
             let l =
                 piece_limits(&bounds, length, feed, &limits).map_err(|e| piece_error(e, loc))?;
-            // A period that crosses from one piece into the next uses one jerk: give both
-            // the lower of their jerk limits — unless the path state already moves on the
-            // piece before, whose limits must not change under it (the generator may be
-            // half-way through a ramp planned with them). That drop is met by the scan
-            // (`Planner::scan`) instead.
-            let mut jerk = l.jerk;
-            if let Some(prev) = self.pieces.back_mut()
-                && prev.start > self.state.s
-            {
-                prev.jerk = prev.jerk.min(jerk);
-                jerk = jerk.min(prev.jerk);
-            }
             let mut piece = Piece {
                 drop: false,
                 shape,
@@ -139,11 +144,11 @@ impl Planner {
                 vmax: l.velocity,
                 feed,
                 grip: l.grip,
-                jerk,
+                jerk: l.jerk,
                 loc,
             };
             piece.drop = self.drops.next(piece.speed_limit(1.0));
-            self.pieces.push_back(piece);
+            self.push_piece(piece);
             self.committed_end += length;
             if is_element {
                 events_at = self.committed_end;
@@ -167,6 +172,65 @@ impl Planner {
             self.add_stop(self.committed_end);
         }
         Ok(())
+    }
+
+    /// Appends a piece to the path. A period that crosses from one piece into the next
+    /// uses one jerk, so neighbours share the lower of their jerk limits near their joint:
+    /// over the whole of the one with the higher limit where that is short, over
+    /// [`SHARED_PERIODS`] periods' travel at its top speed (cut off as a piece of its own)
+    /// where it is a long element. Not across a stop, where no period crosses, and not when
+    /// the path state already moves on the piece before, whose limits must not change
+    /// under it (the generator may be half-way through a ramp planned with them): that
+    /// drop is met by the scan ([`Planner::scan`]) instead.
+    fn push_piece(&mut self, mut piece: Piece) {
+        let state = self.state.s;
+        let period = self.config.period;
+        // The path stands still at a stop: no period crosses it.
+        let stop_between = self
+            .markers
+            .iter()
+            .rev()
+            .map_while(|m| match m {
+                Marker::Stop { at, .. } => (*at >= piece.start).then_some(true),
+                Marker::Event { at, .. } => (*at >= piece.start).then_some(false),
+            })
+            .any(|stop| stop);
+        if let Some(prev) = self.pieces.back_mut()
+            && prev.start > state
+            && !stop_between
+        {
+            if piece.jerk < prev.jerk {
+                match shared_stretch(prev, period) {
+                    Some(tail) => {
+                        let mut cut = prev.clone();
+                        prev.length -= tail;
+                        cut.offset += prev.length;
+                        cut.start = prev.end();
+                        cut.length = tail;
+                        cut.jerk = piece.jerk;
+                        cut.drop = false;
+                        self.pieces.push_back(cut);
+                    }
+                    None => prev.jerk = piece.jerk,
+                }
+            } else if prev.jerk < piece.jerk {
+                let low = prev.jerk;
+                match shared_stretch(&piece, period) {
+                    Some(head) => {
+                        let mut cut = piece.clone();
+                        cut.length = head;
+                        cut.jerk = low;
+                        piece.offset += head;
+                        piece.start += head;
+                        piece.length -= head;
+                        piece.drop = false;
+                        self.pieces.push_back(cut);
+                    }
+                    None => piece.jerk = low,
+                }
+            }
+        }
+        self.pieces.push_back(piece);
     }
 
     /// A plain standstill at `at`.

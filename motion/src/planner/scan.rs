@@ -60,7 +60,7 @@ impl Planner {
         w.limits.clear();
         // Acceleration and jerk for the next period: those of the current piece (the
         // limits ahead make the state arrive at each piece within its acceleration limit;
-        // neighbouring pieces share the lower jerk limit, see `commit_front`).
+        // neighbouring pieces share the lower jerk limit near their joint, see `push_piece`).
         let none = Grip::constant(f64::INFINITY);
         w.grip = none;
         w.jerk = f64::INFINITY;
@@ -90,7 +90,7 @@ impl Planner {
             // A jerk below all before it in the window is a limit too: the state must
             // reach that piece able to go on with its jerk (a piece committed while the
             // path state moved on the piece before keeps its own, higher jerk, see
-            // `commit_front`). Meeting the lowest one ahead prepares for all higher ones.
+            // `push_piece`). Meeting the lowest one ahead prepares for all higher ones.
             let jerk_drops = p.jerk < low_jerk;
             low_jerk = low_jerk.min(p.jerk);
             // Likewise a grip below the lowest before it at some speed; the limit keeps the
