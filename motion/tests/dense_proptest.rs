@@ -191,6 +191,38 @@ fn programs_that_once_went_over_a_limit_stay_within_them() {
             limits: (269.6383370920166, 2757.0302019127835, 5000.0),
             rise: 0.0,
         },
+        // An R5.4 wave in 0.009 mm chords rounded to 1 µm with a corner 4 chords before the
+        // end, on axes with a jerk limit of 5000 mm/s³: a positive acceleration was eased
+        // with the current piece's jerk only when the whole easing ended before the next
+        // drop in jerk, else with the lower jerk throughout; one period's difference made
+        // the braking need jump and the X axis reached 2.7 times its acceleration limit.
+        Dense {
+            radius: 5.3704993233560305,
+            wave: (0.15800004887159919, 1.9839535801376817),
+            chord: 0.00907285852196737,
+            chords: 302,
+            round: 1e-3,
+            corner_every: 298,
+            feed: 75.88231113854242,
+            limits: (179.05984749738616, 1751.718113843781, 5000.0),
+            rise: 0.0,
+        },
+        // An R43.8 wave in 0.011 mm chords rounded to 0.1 µm, 4.9 mm long: speeding up from
+        // the start, the path missed a limit 2.1 mm ahead that it was still below but could
+        // no longer ease into, and that limit stood for the end stop behind it: the ramp
+        // towards it kept speeding up and the stop came late (X at 2.4 times its
+        // acceleration limit).
+        Dense {
+            radius: 43.80170480554279,
+            wave: (0.18608837117747404, 1.9027203329403946),
+            chord: 0.010796272075360717,
+            chords: 457,
+            round: 1e-4,
+            corner_every: 0,
+            feed: 201.3063054452971,
+            limits: (289.97783326230194, 2163.95378598907, 34234.84344396176),
+            rise: 0.0,
+        },
     ];
     for d in &cases {
         if let Err(e) = check_dense(d) {

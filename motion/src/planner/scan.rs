@@ -64,6 +64,7 @@ impl Planner {
         let none = Grip::constant(f64::INFINITY);
         w.grip = none;
         w.jerk = f64::INFINITY;
+        w.period = period;
         let (mut pre_grip, mut pre_jerk) = (none, f64::INFINITY);
         let (mut low_speed, mut low_grip) = (f64::INFINITY, none);
         let mut low_jerk = f64::INFINITY;

@@ -78,6 +78,9 @@ pub struct Window {
     pub grip: Grip,
     /// Jerk limit for the next period.
     pub jerk: f64,
+    /// The servo period (s): a piece starting within one period's travel of the state
+    /// lends its jerk limit to the period's action.
+    pub period: f64,
 }
 
 impl Default for Window {
@@ -86,6 +89,7 @@ impl Default for Window {
             limits: Vec::new(),
             grip: Grip::constant(f64::INFINITY),
             jerk: f64::INFINITY,
+            period: 0.0,
         }
     }
 }
@@ -169,16 +173,19 @@ fn easing_distance(x: &Motion, limit: f64, jerk: f64) -> f64 {
     (x.v * t + 0.5 * x.a * t * t + j * t * t * t / 6.0).max(0.0)
 }
 
-/// The jerk with which `x` may bring a positive acceleration down to zero on its way to
-/// limit `l` ahead: the window's jerk when that is higher than the limit's and the easing
-/// ends before the nearest limit ahead with a lower jerk (where the jerk drops: a piece with
-/// a lower jerk than the current one is always a limit of its own). `None` when the limit's
-/// own jerk applies.
+/// The jerk with which `x` may start bringing a positive acceleration down to zero on its way
+/// to limit `l` ahead, and how far it holds: the window's jerk when that is higher than the
+/// limit's, up to one period's travel before the nearest limit ahead with a lower jerk
+/// (where the jerk drops: a piece with a lower jerk than the current one is always a limit
+/// of its own; `l` itself when none is nearer). From there on the period's action already
+/// has the lower jerk (see `Planner::scan`). `None` when the limit's own jerk applies from
+/// the start.
 ///
-/// A ramp that eased with the lower jerk of a limit far ahead would reach a speed above the
-/// current piece's limit first: the checks would then ask for a braking the current limit
-/// forbids, and no action would satisfy both.
-fn easing_for(x: &Motion, l: &Limit, w: &Window) -> Option<f64> {
+/// Past that place the easing goes on with the lower jerk. A rule that eased with the higher
+/// jerk only when the whole easing ended before the drop would be a cliff: one period
+/// closer to the drop the braking need would jump to the one with the low jerk throughout,
+/// and a state judged safe would have no safe successor.
+fn easing_for(x: &Motion, l: &Limit, w: &Window) -> Option<(f64, f64)> {
     if x.a <= 0.0 || l.at <= x.s || w.jerk <= l.jerk {
         return None;
     }
@@ -186,21 +193,63 @@ fn easing_for(x: &Motion, l: &Limit, w: &Window) -> Option<f64> {
         .limits
         .iter()
         .find(|m| m.at > x.s && m.jerk < w.jerk)
-        .map_or(l.at, |m| m.at);
-    (x.s + easing_distance(x, 0.0, JUDGE * w.jerk) <= nearest).then_some(w.jerk)
+        .map_or(l.at, |m| m.at.min(l.at));
+    // The travel of one period, at the highest speed the easing reaches.
+    let t = w.period;
+    let reach = t * (peak_speed(x, w.jerk) + x.a * t + w.jerk * t * t);
+    Some((w.jerk, (nearest - reach).max(x.s)))
+}
+
+/// Newton steps for the time at which an easing reaches a given distance.
+const EASING_STEPS: usize = 16;
+
+/// The state after `x` (with a positive acceleration) has moved on by `distance` while its
+/// acceleration is brought down with jerk `jerk`, when it gets that far before the
+/// acceleration reaches zero.
+///
+/// The distance after time τ, `v·τ + a·τ²/2 − j·τ³/6`, is increasing and convex until the
+/// acceleration is zero (τ = a/j), so Newton's method started there falls to the root
+/// without overshooting it.
+fn eased_by(x: &Motion, distance: f64, jerk: f64) -> Motion {
+    let end = x.a / jerk;
+    let at = |t: f64| x.v * t + 0.5 * x.a * t * t - jerk * t * t * t / 6.0;
+    let mut t = end;
+    for _ in 0..EASING_STEPS {
+        let speed = x.v + x.a * t - 0.5 * jerk * t * t;
+        if speed <= 0.0 {
+            break;
+        }
+        let next = (t - (at(t) - distance) / speed).clamp(0.0, end);
+        let done = (t - next).abs() <= 1e-15 * end;
+        t = next;
+        if done {
+            break;
+        }
+    }
+    Motion {
+        s: x.s + distance,
+        v: x.v + x.a * t - 0.5 * jerk * t * t,
+        a: x.a - jerk * t,
+    }
 }
 
 /// Distance `x` needs to slow down to the speed of limit `l` ahead ([`brake_distance`] with
 /// `share` of its grip and jerk); where [`easing_for`] allows, a positive acceleration is
-/// first brought to zero with the window's jerk.
+/// first brought down with the window's jerk, as far as that jerk holds.
 fn brake_need(x: &Motion, l: &Limit, w: &Window, share: f64) -> f64 {
     let (grip, jerk) = (l.grip.scaled(share), l.jerk * share);
     let single = brake_distance(x, l.speed, &grip, jerk);
-    let Some(fast) = easing_for(x, l, w) else {
+    let Some((fast, until)) = easing_for(x, l, w) else {
         return single;
     };
     let fast = fast * share;
     let ease = easing_distance(x, 0.0, fast);
+    let room = until - x.s;
+    if ease > room {
+        // The jerk drops before the acceleration is zero: the rest eases with the lower one.
+        let there = eased_by(x, room, fast);
+        return single.min(room + brake_distance(&there, l.speed, &grip, jerk));
+    }
     let eased = Motion {
         s: x.s + ease,
         v: peak_speed(x, fast),
@@ -343,7 +392,10 @@ pub fn braking_speed(target: f64, room: f64, accel: f64, jerk: f64) -> f64 {
 /// that curve meets them all: the checks would contradict the actions. A limit the state
 /// need not slow down for stands for nothing: [`settle`] vouches for the limits after it
 /// only from a state that reaches it without speeding up, and a state below its speed may
-/// still be speeding up when it gets there.
+/// still be speeding up when it gets there. Nor does one the state is still below but
+/// misses (it must slow down for it only because its acceleration could no longer be eased
+/// in time): the ramp for it speeds up towards its speed, and the limits behind it must
+/// be judged, and bind, on their own.
 fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (Limit, f64, f64)> + 'a {
     let mut covered = false;
     let (mut grip, mut jerk) = (Grip::constant(f64::INFINITY), f64::INFINITY);
@@ -360,7 +412,7 @@ fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (Limit, f6
         }
         let (fast, hard) = misses(x, &l, w);
         if l.at > x.s && !l.soft {
-            covered = slows_for(x, &l);
+            covered = slows_for(x, &l) && (x.v >= l.speed || fast == 0.0 && hard == 0.0);
         }
         Some((l, fast, hard))
     })
@@ -406,7 +458,7 @@ fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
             // acceleration be eased with the window's jerk, the ramp eases with it too.
             let jerk = easing_for(from, l, w)
                 .or_else(|| easing_for(x, l, w))
-                .unwrap_or(l.jerk.min(w.jerk));
+                .map_or(l.jerk.min(w.jerk), |(fast, _)| fast);
             (l.speed, l.grip.min(w.grip).at(peak_speed(x, jerk)), jerk)
         } else {
             let accel = arrival_accel(x, l).min(w.grip.at(peak_speed(x, w.jerk)));
@@ -534,6 +586,7 @@ mod tests {
             limits: vec![limit(0.5, 150.0), limit(7.0, 0.0)],
             grip: Grip::constant(1000.0),
             jerk: 1e5,
+            period: 1e-3,
         };
         settle(&mut w.limits);
         let x = Motion {
@@ -556,6 +609,55 @@ mod tests {
         let slower = Motion { v: 80.0, ..x };
         assert!(Ramp::new(slower.v, slower.a, 0.0, 1000.0, 1e5).distance() < 6.5);
         assert!(check(&slower, &w));
+    }
+
+    #[test]
+    fn the_braking_need_does_not_jump_where_the_easing_reaches_a_drop_in_jerk() {
+        // The current piece allows a jerk of 5000 mm/s³, the pieces from 3 mm on only 2000;
+        // a limit of 10 mm/s at 6 mm. A state speeding up eases its acceleration with the
+        // higher jerk as far as 3 mm, then with the lower one. Where braking ends must move
+        // with the state as it passes the place where its easing reaches 3 mm, not jump.
+        let grip = Grip::constant(1000.0);
+        let at = |at: f64, speed: f64, soft: bool| Limit {
+            at,
+            speed,
+            grip_after: grip,
+            grip,
+            jerk: 2000.0,
+            soft,
+        };
+        let w = Window {
+            limits: vec![at(3.0, 100.0, true), at(6.0, 10.0, false)],
+            grip,
+            jerk: 5000.0,
+            period: 1e-3,
+        };
+        let far = w.limits[1];
+        let ends = |s: f64| {
+            let x = Motion {
+                s,
+                v: 20.0,
+                a: 200.0,
+            };
+            s + brake_need(&x, &far, &w, JUDGE)
+        };
+        let (mut crossed, mut prev) = (false, ends(1.0));
+        for k in 1..=1500 {
+            let s = 1.0 + 1e-3 * k as f64;
+            let x = Motion {
+                s,
+                v: 20.0,
+                a: 200.0,
+            };
+            crossed |= s + easing_distance(&x, 0.0, JUDGE * 5000.0) > 3.0;
+            let now = ends(s);
+            assert!(
+                (now - prev).abs() < 5e-3,
+                "braking ends at {prev} mm, then at {now} mm from {s} mm"
+            );
+            prev = now;
+        }
+        assert!(crossed, "the easing never reached the drop in jerk");
     }
 
     #[test]
