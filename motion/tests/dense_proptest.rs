@@ -223,6 +223,23 @@ fn programs_that_once_went_over_a_limit_stay_within_them() {
             limits: (289.97783326230194, 2163.95378598907, 34234.84344396176),
             rise: 0.0,
         },
+        // An R33.5 wave rising 4.3 mm in 0.069 mm chords rounded to 0.1 µm, a 90° corner
+        // every 174 chords, jerk 8186 mm/s³: speeding up towards a limit above its speed
+        // but too close to ease into with the limit's jerk, the path followed a ramp
+        // planned with the window's higher jerk, which eases later than the check allows
+        // where the jerk drops on the way; it missed the next corner stop (X at 5.7 times
+        // its acceleration limit).
+        Dense {
+            radius: 33.454902131552885,
+            wave: (0.12128059884669713, 3.5119368628822767),
+            chord: 0.06850298159695997,
+            chords: 1590,
+            round: 1e-4,
+            corner_every: 174,
+            feed: 141.26508652634485,
+            limits: (275.9535598148392, 2727.9536006849726, 8185.699948426571),
+            rise: 4.3017607983292745,
+        },
     ];
     for d in &cases {
         if let Err(e) = check_dense(d) {

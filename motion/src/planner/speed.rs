@@ -454,11 +454,22 @@ fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
         // missed. Easing the acceleration uses the current piece's jerk (at least the
         // limit's), which eases no later than the check assumes.
         let ramp = if too_fast > 0.0 {
-            // The ramp starts from `from`: where the check there let a positive
-            // acceleration be eased with the window's jerk, the ramp eases with it too.
-            let jerk = easing_for(from, l, w)
-                .or_else(|| easing_for(x, l, w))
-                .map_or(l.jerk.min(w.jerk), |(fast, _)| fast);
+            // The ramp starts from `from`: where the check there lets a positive
+            // acceleration be eased with the window's jerk, the ramp eases with it too. A
+            // limit still above the speed binds only because the acceleration could not be
+            // eased with the limit's own jerk in time; the ramp that keeps it met is the one
+            // that eases with that jerk into its speed (unless the window's jerk eases all
+            // of the acceleration before it drops).
+            let eases = |m: &Motion| {
+                easing_for(m, l, w)
+                    .filter(|&(fast, until)| {
+                        m.v >= l.speed || m.s + easing_distance(m, 0.0, JUDGE * fast) <= until
+                    })
+                    .map(|(fast, _)| fast)
+            };
+            let jerk = eases(from)
+                .or_else(|| eases(x))
+                .unwrap_or(l.jerk.min(w.jerk));
             (l.speed, l.grip.min(w.grip).at(peak_speed(x, jerk)), jerk)
         } else {
             let accel = arrival_accel(x, l).min(w.grip.at(peak_speed(x, w.jerk)));
