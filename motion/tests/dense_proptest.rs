@@ -240,6 +240,35 @@ fn programs_that_once_went_over_a_limit_stay_within_them() {
             limits: (275.9535598148392, 2727.9536006849726, 8185.699948426571),
             rise: 4.3017607983292745,
         },
+        // An R66.8 wave falling 3.6 mm in 0.38 mm chords, jerk 12 550 mm/s³: braking for the
+        // end stop, the path passed limits the backward pass had settled for an arrival
+        // without acceleration faster than they allow, which no ramp could then keep; the
+        // fallback followed the worst of them, not the stop's braking curve, and the stop
+        // came 0.3 µm late (in finite differences X at 21 times its jerk limit).
+        Dense {
+            radius: 66.78495622843249,
+            wave: (0.2576040076918281, 5.982709978828662),
+            chord: 0.3773164044014886,
+            chords: 458,
+            round: 1e-6,
+            corner_every: 0,
+            feed: 153.7911767347449,
+            limits: (267.5722154692818, 1095.9250289235347, 12549.75181647992),
+            rise: -3.6362599350070384,
+        },
+        // The same on a short R36.8 wave in 0.015 mm chords rounded to 1 µm (the end stop
+        // 1 µm late, X at 28 times its jerk limit).
+        Dense {
+            radius: 36.83150400716625,
+            wave: (0.125350112728669, 3.8087282492445436),
+            chord: 0.015327608568816768,
+            chords: 240,
+            round: 1e-3,
+            corner_every: 0,
+            feed: 122.03410221495456,
+            limits: (289.3032123015573, 1629.1210260430203, 23011.238861272443),
+            rise: -3.961609539573245,
+        },
     ];
     for d in &cases {
         if let Err(e) = check_dense(d) {
@@ -251,7 +280,6 @@ fn programs_that_once_went_over_a_limit_stay_within_them() {
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
     #[test]
-    #[ignore = "known defect: rarely a late stop (the last sample clamped onto a stop point, a step in acceleration); the search finds one every several thousand cases, on axes with low jerk limits; run with --ignored"]
     fn dense_code_stays_in_the_band_and_the_limits_and_ends_exactly(d in dense_strategy()) {
         check_dense(&d)?;
     }

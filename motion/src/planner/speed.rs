@@ -21,8 +21,9 @@
 //!    result is safe (found by bisection): it rides the braking curve in front of a limit.
 //!    Binding limits are tried worst first: those the state misses, those the go ramp
 //!    would miss, then a stop;
-//! 3. when none is safe (a state on a braking curve, off it by rounding): the ramp for the
-//!    worst miss, which follows that curve.
+//! 3. when none is safe (a state off a braking curve, by rounding or past limits it meets
+//!    only by braking for one further on): of these ramps the one that leaves the lowest
+//!    speed.
 //!
 //! Each action has |jerk| ≤ J and |a| ≤ A, the window's smallest path limits, so the
 //! per-axis limits of every piece in the window hold. Positions are integrated exactly for
@@ -542,12 +543,15 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     candidates.extend(bindings(x, &go, w));
     let easing = w.easing_jerk(x.s);
     candidates.push((0.0, w.grip.at(peak_speed(x, easing)), easing));
-    let mut fallback = None;
+    let mut fallback: Option<Motion> = None;
     for &(low, accel, jerk) in &candidates {
         let low = low.min(target).max(0.0);
         let brake = ramp_step(x, low, accel, jerk, dt);
         if !check(&brake, w) {
-            fallback.get_or_insert(brake);
+            match fallback {
+                Some(f) if brake.v >= f.v => {}
+                _ => fallback = Some(brake),
+            }
             continue;
         }
         let (mut lo, mut hi) = (low, target);
@@ -566,8 +570,12 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         }
         return best;
     }
-    // No ramp keeps every limit (a state on a braking curve, off it by rounding): the one
-    // for the worst miss follows that curve.
+    // No ramp keeps every limit: the state is off a braking curve, by rounding, or because it
+    // passes limits the backward pass settled for arriving without acceleration while it
+    // brakes for one further on, faster than they allow and yet in time for that one. The
+    // ramp for the worst miss would follow the curve of a limit that does not bind and leave
+    // the one that does behind (an end stop came 0.3 µm late): take the ramp that leaves the
+    // lowest speed, the nearest to all of those curves at once.
     fallback.unwrap_or(go)
 }
 
