@@ -187,3 +187,41 @@ proptest! {
         }
     }
 }
+
+/// A short spline, then a tight helix (r 0.5 mm) on axes with a jerk limit of 2000 mm/s³:
+/// braking hard into the helix, with no ramp within every limit, the generator once took a
+/// plain stop that overshot below zero speed, and the path turned back (X at 4.7 times its
+/// jerk limit).
+#[test]
+fn braking_into_a_tight_helix_never_turns_the_path_back() {
+    let moves = vec![
+        Move::Spline {
+            chord: [5.560822038288019, -16.169881472665363, 10.373629616409278],
+            k: [[0.0, 0.0], [-1.9925931192762814, 0.0], [0.0, 0.0]],
+            feed: 72.56598635528401,
+        },
+        Move::Arc {
+            plane: 0,
+            radius: 0.5,
+            sweep: -332.8175074365912,
+            rise: 2.450765307417682,
+            feed: 117.2553635290041,
+        },
+    ];
+    let axis = |v: f64, j: f64| AxisLimits {
+        max_velocity: v,
+        max_acceleration: 200.0,
+        max_jerk: j,
+    };
+    let mut limits = [None; 9];
+    limits[0] = Some(axis(20.0, 2000.0));
+    limits[1] = Some(axis(200.14302916465493, 112015.04087795762));
+    limits[2] = Some(axis(90.61147354321417, 2000.0));
+    let cfg = config(limits);
+    let start = Pose::xyz(1.0, 2.0, 3.0);
+    let (ops, _, end) = build(&moves);
+    let r = run(cfg.clone(), start, ops);
+    assert_within_limits(&cfg, &start, &r.samples, 1.01);
+    let last = r.samples.last().map(|s| s.pose);
+    assert!(last.is_some_and(|p| (0..3).all(|i| (p.0[i] - end.0[i]).abs() <= 1e-9)));
+}

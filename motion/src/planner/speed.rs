@@ -23,7 +23,7 @@
 //!    would miss, then a stop;
 //! 3. when none is safe (a state off a braking curve, by rounding or past limits it meets
 //!    only by braking for one further on): of these ramps the one that leaves the lowest
-//!    speed.
+//!    speed without turning the path back.
 //!
 //! Each action has |jerk| ≤ J and |a| ≤ A, the window's smallest path limits, so the
 //! per-axis limits of every piece in the window hold. Positions are integrated exactly for
@@ -529,6 +529,13 @@ fn go_step(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         .unwrap_or(plain)
 }
 
+/// The lowest speed `x` reaches when a negative acceleration is brought to zero at once
+/// with the jerk the window allows for that.
+fn peak_speed_low(x: &Motion, w: &Window) -> f64 {
+    let a = x.a.min(0.0);
+    x.v - a * a / (2.0 * w.easing_jerk(x.s))
+}
+
 /// The state one period `dt` on, heading for `target` speed.
 pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     let go = go_step(x, target, w, dt);
@@ -543,14 +550,21 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     candidates.extend(bindings(x, &go, w));
     let easing = w.easing_jerk(x.s);
     candidates.push((0.0, w.grip.at(peak_speed(x, easing)), easing));
-    let mut fallback: Option<Motion> = None;
+    let mut fallback: Option<(Motion, bool)> = None;
     for &(low, accel, jerk) in &candidates {
         let low = low.min(target).max(0.0);
         let brake = ramp_step(x, low, accel, jerk, dt);
         if !check(&brake, w) {
+            // Kept for the fallback below: the slowest of the ramps that go on forwards (the
+            // speed can still come to rest without reversing), else the first.
+            let forwards = brake.v >= 0.0 && peak_speed_low(&brake, w) >= -SPEED_SLACK;
             match fallback {
-                Some(f) if brake.v >= f.v => {}
-                _ => fallback = Some(brake),
+                None => fallback = Some((brake, forwards)),
+                Some((f, f_forwards)) => {
+                    if forwards && (!f_forwards || brake.v < f.v) {
+                        fallback = Some((brake, forwards));
+                    }
+                }
             }
             continue;
         }
@@ -575,8 +589,10 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     // brakes for one further on, faster than they allow and yet in time for that one. The
     // ramp for the worst miss would follow the curve of a limit that does not bind and leave
     // the one that does behind (an end stop came 0.3 µm late): take the ramp that leaves the
-    // lowest speed, the nearest to all of those curves at once.
-    fallback.unwrap_or(go)
+    // lowest speed, the nearest to all of those curves at once, among those that go on
+    // forwards (a plain stop from a state braking hard can overshoot below zero: the path
+    // would turn back).
+    fallback.map_or(go, |(f, _)| f)
 }
 
 #[cfg(test)]
