@@ -1,13 +1,14 @@
 //! Property test: random lines, arcs, helices and splines with random axis limits and feeds never
 //! drive an axis past its velocity, acceleration or jerk limit (finite differences of the
-//! sampled positions, 1 % slack), never exceed the feed, and end exactly.
+//! sampled positions, 1 % slack), never exceed the feed, and end exactly; nor do they when the
+//! feed override changes and feed holds come at random times.
 
 mod common;
 
 use common::*;
 use klar_interp::op::SplineAxis;
 use klar_interp::{AxisLetter, Feed, Op, OpKind, Plane, Pose};
-use klar_motion::AxisLimits;
+use klar_motion::{AxisLimits, Planner, Sample, Step};
 use proptest::prelude::*;
 
 /// One random move, described independently of the planner.
@@ -223,5 +224,149 @@ fn braking_into_a_tight_helix_never_turns_the_path_back() {
     let r = run(cfg.clone(), start, ops);
     assert_within_limits(&cfg, &start, &r.samples, 1.01);
     let last = r.samples.last().map(|s| s.pose);
+    assert!(last.is_some_and(|p| (0..3).all(|i| (p.0[i] - end.0[i]).abs() <= 1e-9)));
+}
+
+/// An operator's action at a time into the run.
+#[derive(Debug, Clone, Copy)]
+enum Control {
+    /// Sets the feed override to this factor.
+    Override(f64),
+    /// Holds the feed for this many seconds, then resumes.
+    Hold(f64),
+}
+
+fn control_strategy() -> impl Strategy<Value = (f64, Control)> {
+    (
+        0.0f64..2.0,
+        prop_oneof![
+            (0.1f64..1.5).prop_map(Control::Override),
+            (0.01f64..0.5).prop_map(Control::Hold),
+        ],
+    )
+}
+
+/// Runs `ops` from `start`, acting on the planner as `controls` say before every step.
+fn run_controlled(
+    cfg: &klar_motion::PlannerConfig,
+    start: Pose,
+    ops: Vec<Op>,
+    controls: &[(f64, Control)],
+) -> Vec<Sample> {
+    let mut planner = Planner::new(cfg.clone(), start).expect("valid config");
+    let mut ops = ops.into_iter();
+    let mut samples: Vec<Sample> = Vec::new();
+    loop {
+        while planner.needs_input() {
+            match ops.next() {
+                Some(o) => planner.push(o).expect("op accepted"),
+                None => planner.finish(),
+            }
+        }
+        let t = samples.last().map_or(0.0, |s| s.t);
+        let mut factor = 1.0;
+        let mut held = false;
+        for &(at, c) in controls.iter().filter(|(at, _)| *at <= t) {
+            match c {
+                Control::Override(f) => factor = f,
+                Control::Hold(d) => held |= t < at + d,
+            }
+        }
+        planner.set_feed_override(factor);
+        if held {
+            planner.hold();
+        } else {
+            planner.resume();
+        }
+        match planner.next_step() {
+            Some(Step::Sample(s)) => samples.push(s),
+            Some(Step::Event(_)) => {}
+            None => break,
+        }
+        assert!(samples.len() < 5_000_000, "does not terminate");
+    }
+    samples
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(48))]
+
+    #[test]
+    #[ignore = "known defect: see a_feed_hold_before_a_piece_with_a_lower_jerk_stops_smoothly; the search finds such a case every few dozen programs; run with --ignored"]
+    fn override_and_hold_keep_every_limit_and_end_exactly(
+        moves in prop::collection::vec(move_strategy(), 1..4),
+        lx in limits_strategy(),
+        ly in limits_strategy(),
+        lz in limits_strategy(),
+        controls in prop::collection::vec(control_strategy(), 1..5),
+    ) {
+        let mut limits = [None; 9];
+        limits[0] = Some(lx);
+        limits[1] = Some(ly);
+        limits[2] = Some(lz);
+        let cfg = config(limits);
+        let start = Pose::xyz(1.0, 2.0, 3.0);
+        let (ops, _, end) = build(&moves);
+        let samples = run_controlled(&cfg, start, ops, &controls);
+        assert_within_limits(&cfg, &start, &samples, 1.01);
+        let last = samples.last().map(|s| s.pose);
+        prop_assert!(
+            last.is_some_and(|p| (0..3).all(|i| (p.0[i] - end.0[i]).abs() <= 1e-9)),
+            "ends at {last:?}, not {end:?}"
+        );
+    }
+}
+
+/// A line into a helix, with a feed hold 1.15 s into the run. Known defect: while the path
+/// brakes for the hold, a limit with a lower jerk 10 mm further on enters the look-ahead,
+/// and the check judges the deceleration unable to come to rest with that jerk, although
+/// the path stops long before it; the ramps it then takes ease too slowly, the speed
+/// reaches zero with a deceleration of 357 mm/s² left and Y goes to twice its jerk limit.
+/// Judging the easing with the current jerk where it ends before that limit fixes this case
+/// but lets other random programs over a limit (`random_moves_respect_every_limit`).
+#[test]
+#[ignore = "known defect: a feed hold can stop with a step in acceleration where a piece with a lower jerk lies beyond the stopping point; run with --ignored"]
+fn a_feed_hold_before_a_piece_with_a_lower_jerk_stops_smoothly() {
+    let moves = vec![
+        Move::Line {
+            to: [-34.12316811727813, -27.448352241434456, 47.554127245210815],
+            feed: Some(64.37070244450602),
+        },
+        Move::Arc {
+            plane: 2,
+            radius: 29.081123428483988,
+            sweep: 569.9205884286991,
+            rise: 8.563387815356618,
+            feed: 67.1057191290921,
+        },
+    ];
+    let axis = |v: f64, a: f64, j: f64| AxisLimits {
+        max_velocity: v,
+        max_acceleration: a,
+        max_jerk: j,
+    };
+    let mut limits = [None; 9];
+    limits[0] = Some(axis(
+        373.7321125649325,
+        2838.995392178491,
+        159017.51344755257,
+    ));
+    limits[1] = Some(axis(
+        21.52127099835181,
+        2301.531620260747,
+        60296.352331347705,
+    ));
+    limits[2] = Some(axis(
+        46.05032508190075,
+        686.6150231507412,
+        6810.752370122756,
+    ));
+    let cfg = config(limits);
+    let start = Pose::xyz(1.0, 2.0, 3.0);
+    let (ops, _, end) = build(&moves);
+    let controls = [(1.1491671832354273, Control::Hold(0.28340385516935857))];
+    let samples = run_controlled(&cfg, start, ops, &controls);
+    assert_within_limits(&cfg, &start, &samples, 1.01);
+    let last = samples.last().map(|s| s.pose);
     assert!(last.is_some_and(|p| (0..3).all(|i| (p.0[i] - end.0[i]).abs() <= 1e-9)));
 }
