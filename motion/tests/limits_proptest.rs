@@ -85,6 +85,15 @@ fn limits_strategy() -> impl Strategy<Value = AxisLimits> {
     })
 }
 
+/// The planner configuration with these limits for X, Y and Z.
+fn config_xyz(lx: AxisLimits, ly: AxisLimits, lz: AxisLimits) -> klar_motion::PlannerConfig {
+    let mut limits = [None; 9];
+    limits[0] = Some(lx);
+    limits[1] = Some(ly);
+    limits[2] = Some(lz);
+    config(limits)
+}
+
 /// Turns the random moves into ops; arcs start where the tool is, with the centre placed
 /// `radius` away at a fixed angle.
 fn build(moves: &[Move]) -> (Vec<Op>, Vec<Option<f64>>, Pose) {
@@ -165,11 +174,7 @@ proptest! {
         ly in limits_strategy(),
         lz in limits_strategy(),
     ) {
-        let mut limits = [None; 9];
-        limits[0] = Some(lx);
-        limits[1] = Some(ly);
-        limits[2] = Some(lz);
-        let cfg = config(limits);
+        let cfg = config_xyz(lx, ly, lz);
         let start = Pose::xyz(1.0, 2.0, 3.0);
         let (ops, feeds, end) = build(&moves);
         let r = run(cfg.clone(), start, ops);
@@ -214,11 +219,11 @@ fn braking_into_a_tight_helix_never_turns_the_path_back() {
         max_acceleration: 200.0,
         max_jerk: j,
     };
-    let mut limits = [None; 9];
-    limits[0] = Some(axis(20.0, 2000.0));
-    limits[1] = Some(axis(200.14302916465493, 112015.04087795762));
-    limits[2] = Some(axis(90.61147354321417, 2000.0));
-    let cfg = config(limits);
+    let cfg = config_xyz(
+        axis(20.0, 2000.0),
+        axis(200.14302916465493, 112015.04087795762),
+        axis(90.61147354321417, 2000.0),
+    );
     let start = Pose::xyz(1.0, 2.0, 3.0);
     let (ops, _, end) = build(&moves);
     let r = run(cfg.clone(), start, ops);
@@ -300,11 +305,7 @@ proptest! {
         lz in limits_strategy(),
         controls in prop::collection::vec(control_strategy(), 1..5),
     ) {
-        let mut limits = [None; 9];
-        limits[0] = Some(lx);
-        limits[1] = Some(ly);
-        limits[2] = Some(lz);
-        let cfg = config(limits);
+        let cfg = config_xyz(lx, ly, lz);
         let start = Pose::xyz(1.0, 2.0, 3.0);
         let (ops, _, end) = build(&moves);
         let samples = run_controlled(&cfg, start, ops, &controls);
@@ -345,23 +346,11 @@ fn a_feed_hold_before_a_piece_with_a_lower_jerk_stops_smoothly() {
         max_acceleration: a,
         max_jerk: j,
     };
-    let mut limits = [None; 9];
-    limits[0] = Some(axis(
-        373.7321125649325,
-        2838.995392178491,
-        159017.51344755257,
-    ));
-    limits[1] = Some(axis(
-        21.52127099835181,
-        2301.531620260747,
-        60296.352331347705,
-    ));
-    limits[2] = Some(axis(
-        46.05032508190075,
-        686.6150231507412,
-        6810.752370122756,
-    ));
-    let cfg = config(limits);
+    let cfg = config_xyz(
+        axis(373.7321125649325, 2838.995392178491, 159017.51344755257),
+        axis(21.52127099835181, 2301.531620260747, 60296.352331347705),
+        axis(46.05032508190075, 686.6150231507412, 6810.752370122756),
+    );
     let start = Pose::xyz(1.0, 2.0, 3.0);
     let (ops, _, end) = build(&moves);
     let controls = [(1.1491671832354273, Control::Hold(0.28340385516935857))];
