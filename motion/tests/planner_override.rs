@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use klar_interp::{Feed, Op, OpKind, Pose};
-use klar_motion::{Planner, Sample, Step};
+use klar_motion::{Planner, Sample};
 use std::f64::consts::PI;
 
 /// Path speed of a sample over X Y Z.
@@ -35,32 +35,15 @@ fn off_square(p: &Pose) -> f64 {
     inside.max(outside)
 }
 
-/// Runs `ops`, calling `control` before every step with the samples so far.
+/// Runs `ops` on the test machine, calling `control` before every step with the samples so
+/// far.
 fn run_with(
     start: Pose,
     ops: Vec<Op>,
-    mut control: impl FnMut(&mut Planner, &[Sample]),
+    control: impl FnMut(&mut Planner, &[Sample]),
 ) -> Vec<Sample> {
     let cfg = config(limits_xyz(100.0, 1000.0, 20_000.0));
-    let mut planner = Planner::new(cfg, start).unwrap();
-    let mut ops = ops.into_iter();
-    let mut samples = Vec::new();
-    loop {
-        while planner.needs_input() {
-            match ops.next() {
-                Some(o) => planner.push(o).unwrap(),
-                None => planner.finish(),
-            }
-        }
-        control(&mut planner, &samples);
-        match planner.next_step() {
-            Some(Step::Sample(s)) => samples.push(s),
-            Some(Step::Event(_)) => {}
-            None => break,
-        }
-        assert!(samples.len() < 1_000_000, "does not terminate");
-    }
-    samples
+    run_controlled(cfg, start, ops, control).samples
 }
 
 #[test]

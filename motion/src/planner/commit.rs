@@ -3,7 +3,7 @@
 //! commit produces.
 
 use super::path::{Committed, Element, Piece, Shape, Vertices, commit, piece_limits};
-use super::{Marker, Planner, path, piece_error, smooth};
+use super::{Marker, Planner, path, piece_error, smooth, speed};
 use crate::error::MotionError;
 use crate::geom::Metric;
 
@@ -30,8 +30,7 @@ fn shared_stretch(piece: &Piece, period: f64) -> Option<f64> {
     if !matches!(piece.shape, Shape::Element(_)) {
         return None;
     }
-    let reach =
-        piece.vmax * period + piece.grip.most() * period * period + piece.jerk * period.powi(3);
+    let reach = speed::period_travel(piece.vmax, piece.grip.most(), piece.jerk, period);
     let stretch = SHARED_PERIODS * reach;
     (stretch.is_finite() && piece.length > 2.0 * stretch).then_some(stretch)
 }

@@ -163,6 +163,7 @@ impl Planner {
         let horizon = 2.0 * Ramp::new(top, 0.0, 0.0, accel_floor, jerk_floor).distance()
             + 4.0 * top * config.period
             + 1.0;
+        let period = config.period;
         Ok(Planner {
             tolerance: config.tolerance,
             base_limits: config.limits,
@@ -183,7 +184,10 @@ impl Planner {
             reached: 0.0,
             stash: None,
             hold_until: None,
-            window: Window::default(),
+            window: Window {
+                period,
+                ..Window::default()
+            },
             range: 0.0,
             factor: 1.0,
             held: false,

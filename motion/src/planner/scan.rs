@@ -64,16 +64,17 @@ impl Planner {
         let none = Grip::constant(f64::INFINITY);
         w.grip = none;
         w.jerk = f64::INFINITY;
-        w.period = period;
         let (mut pre_grip, mut pre_jerk) = (none, f64::INFINITY);
         let (mut low_speed, mut low_grip) = (f64::INFINITY, none);
         let mut low_jerk = f64::INFINITY;
         // Path distance the next period can reach: a piece starting within it shares its
         // jerk limit with the current one for that period.
-        let next_reach = s
-            + self.state.v * period
-            + self.state.a.abs() * period * period
-            + self.pieces.get(first).map_or(0.0, |p| p.jerk) * period.powi(3);
+        let next_reach = s + speed::period_travel(
+            self.state.v,
+            self.state.a,
+            self.pieces.get(first).map_or(0.0, |p| p.jerk),
+            period,
+        );
         for (k, p) in self.pieces.iter().skip(first).enumerate() {
             if p.start - s > range || p.start >= stop {
                 break;

@@ -131,6 +131,13 @@ const GRIP_CHANGE: f64 = 0.02;
 /// Golden-section steps for the ramp's top speed when speeding up on a curve.
 const TOP_STEPS: usize = 14;
 
+/// Distance one servo period of `period` seconds can cover at most from speed `v` with
+/// acceleration `a` under jerk `jerk` (a bound: `v·T + |a|·T² + j·T³`). A piece that starts
+/// within it may be reached in the next period.
+pub fn period_travel(v: f64, a: f64, jerk: f64, period: f64) -> f64 {
+    v * period + a.abs() * period * period + jerk * period.powi(3)
+}
+
 /// The highest speed `x` reaches when its acceleration is brought to zero at once.
 pub fn peak_speed(x: &Motion, jerk: f64) -> f64 {
     let a = x.a.max(0.0);
@@ -196,8 +203,7 @@ fn easing_for(x: &Motion, l: &Limit, w: &Window) -> Option<(f64, f64)> {
         .find(|m| m.at > x.s && m.jerk < w.jerk)
         .map_or(l.at, |m| m.at.min(l.at));
     // The travel of one period, at the highest speed the easing reaches.
-    let t = w.period;
-    let reach = t * (peak_speed(x, w.jerk) + x.a * t + w.jerk * t * t);
+    let reach = period_travel(peak_speed(x, w.jerk), x.a, w.jerk, w.period);
     Some((w.jerk, (nearest - reach).max(x.s)))
 }
 
@@ -429,7 +435,7 @@ fn slows_for(x: &Motion, l: &Limit) -> bool {
 /// True when the state is safe: every limit in the window can still be met, and the speed
 /// can come to rest without reversing.
 pub fn check(x: &Motion, w: &Window) -> bool {
-    if x.a < 0.0 && x.v - x.a * x.a / (2.0 * w.easing_jerk(x.s)) < -SPEED_SLACK {
+    if !rests_forwards(x, w) {
         return false;
     }
     relevant(x, w).all(|(_, fast, hard)| fast == 0.0 && hard == 0.0)
@@ -529,11 +535,10 @@ fn go_step(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         .unwrap_or(plain)
 }
 
-/// The lowest speed `x` reaches when a negative acceleration is brought to zero at once
-/// with the jerk the window allows for that.
-fn peak_speed_low(x: &Motion, w: &Window) -> f64 {
-    let a = x.a.min(0.0);
-    x.v - a * a / (2.0 * w.easing_jerk(x.s))
+/// True when `x` can come to rest without reversing: a negative acceleration, brought to
+/// zero at once with the jerk the window allows for that, leaves the speed at least zero.
+fn rests_forwards(x: &Motion, w: &Window) -> bool {
+    x.a >= 0.0 || x.v - x.a * x.a / (2.0 * w.easing_jerk(x.s)) >= -SPEED_SLACK
 }
 
 /// The state one period `dt` on, heading for `target` speed.
@@ -557,7 +562,7 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         if !check(&brake, w) {
             // Kept for the fallback below: the slowest of the ramps that go on forwards (the
             // speed can still come to rest without reversing), else the first.
-            let forwards = brake.v >= 0.0 && peak_speed_low(&brake, w) >= -SPEED_SLACK;
+            let forwards = brake.v >= 0.0 && rests_forwards(&brake, w);
             match fallback {
                 None => fallback = Some((brake, forwards)),
                 Some((f, f_forwards)) => {

@@ -88,6 +88,17 @@ pub struct Run {
 
 /// Drives a planner the way the runtime does: push while it needs input, then step.
 pub fn run(config: PlannerConfig, start: Pose, ops: Vec<Op>) -> Run {
+    run_controlled(config, start, ops, |_, _| {})
+}
+
+/// [`run`], calling `control` before every step with the planner and the samples so far
+/// (an operator changing the feed override or holding the feed).
+pub fn run_controlled(
+    config: PlannerConfig,
+    start: Pose,
+    ops: Vec<Op>,
+    mut control: impl FnMut(&mut Planner, &[Sample]),
+) -> Run {
     let mut planner = Planner::new(config, start).expect("valid config");
     let mut ops = ops.into_iter();
     let mut out = Run::default();
@@ -100,6 +111,7 @@ pub fn run(config: PlannerConfig, start: Pose, ops: Vec<Op>) -> Run {
             }
         }
         out.planned_time = planner.planned_time();
+        control(&mut planner, &out.samples);
         match planner.next_step() {
             Some(Step::Sample(s)) => out.samples.push(s),
             Some(Step::Event(e)) => out.events.push((out.samples.len(), e)),
