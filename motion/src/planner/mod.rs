@@ -51,6 +51,19 @@ pub const CONTINUITY_TOLERANCE: f64 = 1e-6;
 /// Distance (mm) within which a standstill counts as reaching a stop point.
 const STOP_SNAP: f64 = 1e-6;
 
+/// Distance (mm) within which a standstill is on a point by rounding alone. A standstill
+/// short of a stop point by more is not put there at once: a feed hold brakes as soon as it
+/// is asked for and may come to rest just before a stop point it was braking for anyway, and
+/// putting the state on the point in one period would be a step of up to [`STOP_SNAP`] in
+/// position, a jerk of `STOP_SNAP / T³` (1000 mm/s³ at 1 ms). The rest of the way is
+/// travelled, jerk-limited, once the hold ends (the state is put on the point only when that
+/// braking ends within [`STOP_SNAP`] of it, with no hold in force).
+const ROUNDING: f64 = 1e-9;
+
+/// Share of the path's jerk limit that putting the state on a stop point may cost at most
+/// when it is not yet at rest there.
+const SNAP_JERK_SHARE: f64 = 1e-3;
+
 /// Elements kept back for corner decisions at least.
 const ELEMENTS_AHEAD: usize = 3;
 
@@ -497,6 +510,12 @@ impl Planner {
         self.state.v <= 1e-9 && self.state.a.abs() <= 1e-3
     }
 
+    /// Distance within which a standstill braked for a stop point is put on it (see
+    /// [`ROUNDING`]).
+    fn stop_snap(&self) -> f64 {
+        if self.held { ROUNDING } else { STOP_SNAP }
+    }
+
     /// The next sample or event; `None` once finished and drained (or, before
     /// [`Planner::finish`], when it needs input first).
     pub fn next_step(&mut self) -> Option<Step> {
@@ -510,7 +529,7 @@ impl Planner {
                 Some(Marker::Stop { at, .. })
                     if self.stash.is_none()
                         && self.at_rest()
-                        && (*at - self.state.s).abs() <= STOP_SNAP =>
+                        && (*at - self.state.s).abs() <= ROUNDING =>
                 {
                     let at = *at;
                     self.state = Motion {
@@ -561,7 +580,7 @@ impl Planner {
             if self.finished
                 && self.markers.is_empty()
                 && self.at_rest()
-                && self.state.s >= self.committed_end - STOP_SNAP
+                && self.state.s >= self.committed_end - ROUNDING
             {
                 return None;
             }
@@ -607,8 +626,14 @@ impl Planner {
         if next.v < 0.0 {
             next.v = 0.0;
         }
-        // A standstill within rounding of the stop point is on it.
-        if next.v <= 1e-9 && next.a.abs() <= 1e-3 && stop - next.s <= STOP_SNAP {
+        // A standstill within rounding of the stop point is on it, and so is a state that
+        // the stop point is within a negligible jerk of (the last period of a stop that ends
+        // a hair short, with a speed of a few µm/s left).
+        let period = self.config.period;
+        let step_jerk =
+            (stop - next.s) / period.powi(3) + next.v / (period * period) + next.a.abs() / period;
+        let rests = next.v <= 1e-9 && next.a.abs() <= 1e-3 && stop - next.s <= self.stop_snap();
+        if rests || (next.s <= stop && step_jerk <= SNAP_JERK_SHARE * self.window.jerk) {
             next = Motion {
                 s: stop,
                 v: 0.0,

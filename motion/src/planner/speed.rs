@@ -20,7 +20,10 @@
 //! 2. the ramp towards the highest speed, between a binding limit and the go target, whose
 //!    result is safe (found by bisection): it rides the braking curve in front of a limit.
 //!    Binding limits are tried worst first: those the state misses, those the go ramp
-//!    would miss, then a stop;
+//!    would miss; then, with a deceleration, the ramp that eases it at once with the
+//!    current jerk (the way to come to rest without reversing that the check assumes); then
+//!    a stop. The search looks no higher than the speed above which all ramps move alike
+//!    over the period, so it stays fine where the answer is;
 //! 3. when none is safe (a state off a braking curve, by rounding or past limits it meets
 //!    only by braking for one further on): of these ramps the one that leaves the lowest
 //!    speed without turning the path back.
@@ -95,17 +98,6 @@ impl Default for Window {
     }
 }
 
-impl Window {
-    /// The jerk that brings a negative acceleration back to zero from position `s`: the
-    /// smallest one up to the nearest limit ahead, where the pieces ahead may lower it.
-    fn easing_jerk(&self, s: f64) -> f64 {
-        self.limits
-            .iter()
-            .find(|l| l.at > s)
-            .map_or(self.jerk, |l| l.jerk.min(self.jerk))
-    }
-}
-
 /// Share of a limit's acceleration and jerk that the braking ramps of the checks assume.
 /// The actions brake with the full limits, so a state judged safe always has an action
 /// whose result is judged safe again, with room for rounding and for limits that follow
@@ -115,8 +107,14 @@ const JUDGE: f64 = 0.98;
 /// Bisection steps for the constant-jerk action.
 const BISECTION_STEPS: usize = 20;
 
-/// Relative speed slack when comparing with a limit (rounding).
+/// Slack for rounding: relative, when comparing an acceleration with a limit; absolute
+/// (mm/s), for the speed left when a deceleration is eased.
 const SPEED_SLACK: f64 = 1e-9;
+
+/// Relative slack above a speed limit that a state may have and still meet it (rounding),
+/// and the absolute slack above a stop's zero. The search for the highest safe ramp can land
+/// anywhere within it, so it is kept well below what a trace would notice.
+const LIMIT_SLACK: f64 = 1e-11;
 
 /// Distance slack when comparing braking distances (rounding), mm.
 const DISTANCE_SLACK: f64 = 1e-12;
@@ -210,19 +208,21 @@ fn easing_for(x: &Motion, l: &Limit, w: &Window) -> Option<(f64, f64)> {
 /// Newton steps for the time at which an easing reaches a given distance.
 const EASING_STEPS: usize = 16;
 
-/// The state after `x` (with a positive acceleration) has moved on by `distance` while its
-/// acceleration is brought down with jerk `jerk`, when it gets that far before the
-/// acceleration reaches zero.
+/// The state after `x` has moved on by `distance` while its acceleration is brought towards
+/// zero with jerk `jerk`, when it gets that far before the acceleration reaches zero (and,
+/// for a negative acceleration, before the speed does).
 ///
-/// The distance after time τ, `v·τ + a·τ²/2 − j·τ³/6`, is increasing and convex until the
-/// acceleration is zero (τ = a/j), so Newton's method started there falls to the root
-/// without overshooting it.
+/// The distance after time τ is `v·τ + a·τ²/2 − sign(a)·j·τ³/6`, increasing while the speed
+/// is positive. With a positive acceleration it is convex until the acceleration is zero, so
+/// Newton's method started there falls to the root without overshooting it; with a
+/// negative one it is concave, and Newton's method started at zero climbs to it.
 fn eased_by(x: &Motion, distance: f64, jerk: f64) -> Motion {
-    let end = x.a / jerk;
-    let at = |t: f64| x.v * t + 0.5 * x.a * t * t - jerk * t * t * t / 6.0;
-    let mut t = end;
+    let end = x.a.abs() / jerk;
+    let j = -x.a.signum() * jerk;
+    let at = |t: f64| x.v * t + 0.5 * x.a * t * t + j * t * t * t / 6.0;
+    let mut t = if x.a > 0.0 { end } else { 0.0 };
     for _ in 0..EASING_STEPS {
-        let speed = x.v + x.a * t - 0.5 * jerk * t * t;
+        let speed = x.v + x.a * t + 0.5 * j * t * t;
         if speed <= 0.0 {
             break;
         }
@@ -235,8 +235,8 @@ fn eased_by(x: &Motion, distance: f64, jerk: f64) -> Motion {
     }
     Motion {
         s: x.s + distance,
-        v: x.v + x.a * t - 0.5 * jerk * t * t,
-        a: x.a - jerk * t,
+        v: x.v + x.a * t + 0.5 * j * t * t,
+        a: x.a + j * t,
     }
 }
 
@@ -429,7 +429,7 @@ fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (Limit, f6
 /// region, so the distance to come to rest always counts).
 fn slows_for(x: &Motion, l: &Limit) -> bool {
     let zeroed = x.v + x.a * x.a.abs() / (2.0 * l.jerk);
-    (l.speed <= 0.0 && x.v > 0.0) || zeroed > l.speed * (1.0 + SPEED_SLACK) + SPEED_SLACK
+    (l.speed <= 0.0 && x.v > 0.0) || zeroed > l.speed * (1.0 + LIMIT_SLACK) + LIMIT_SLACK
 }
 
 /// True when the state is safe: every limit in the window can still be met, and the speed
@@ -535,10 +535,47 @@ fn go_step(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         .unwrap_or(plain)
 }
 
+/// The nearest limit ahead of `x` where the jerk drops below the window's, and the place
+/// from which the period's action may already have that lower jerk: one period's travel
+/// before it (see `Planner::scan`).
+fn jerk_drop(x: &Motion, w: &Window) -> Option<(f64, f64)> {
+    let drop = w.limits.iter().find(|m| m.at > x.s && m.jerk < w.jerk)?;
+    let reach = period_travel(x.v, x.a, w.jerk, w.period);
+    Some((drop.jerk, (drop.at - reach).max(x.s)))
+}
+
 /// True when `x` can come to rest without reversing: a negative acceleration, brought to
-/// zero at once with the jerk the window allows for that, leaves the speed at least zero.
+/// zero at once, leaves the speed at least zero. The easing has the window's jerk up to the
+/// next drop in jerk ahead ([`jerk_drop`]) and the lower jerk from there on, so a state that
+/// slows down to a standstill well before a piece with a lower jerk (a feed hold) is judged
+/// with the jerk it brakes with, and the judgement moves smoothly with the state as the drop
+/// comes near.
 fn rests_forwards(x: &Motion, w: &Window) -> bool {
-    x.a >= 0.0 || x.v - x.a * x.a / (2.0 * w.easing_jerk(x.s)) >= -SPEED_SLACK
+    let rests = |m: &Motion, jerk: f64| m.v - m.a * m.a / (2.0 * jerk) >= -SPEED_SLACK;
+    if x.a >= 0.0 {
+        return true;
+    }
+    if !rests(x, w.jerk) {
+        return false;
+    }
+    let Some((low, until)) = jerk_drop(x, w) else {
+        return true;
+    };
+    let room = until - x.s;
+    if easing_distance(x, 0.0, w.jerk) <= room {
+        return true;
+    }
+    rests(&eased_by(x, room, w.jerk), low)
+}
+
+/// The speed above which every ramp from `x` with jerk `jerk` moves alike over the next
+/// `dt`: the acceleration rises with the full jerk all period long, as the speed it would
+/// reach by easing at once is still below the target at the period's end (with a little
+/// room for rounding).
+fn reachable_speed(x: &Motion, jerk: f64, dt: f64) -> f64 {
+    let a = x.a + jerk * dt;
+    let v = x.v + x.a * dt + 0.5 * jerk * dt * dt;
+    (v + a.max(0.0).powi(2) / (2.0 * jerk)).max(x.v) * (1.0 + 1e-6) + 1e-9
 }
 
 /// The state one period `dt` on, heading for `target` speed.
@@ -553,11 +590,27 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     // ramp rides the braking curve in front of the binding limit.
     let mut candidates = bindings(x, x, w);
     candidates.extend(bindings(x, &go, w));
-    let easing = w.easing_jerk(x.s);
-    candidates.push((0.0, w.grip.at(peak_speed(x, easing)), easing));
+    for c in &mut candidates {
+        c.0 = c.0.min(target);
+    }
+    if x.a < 0.0 {
+        // Easing a deceleration at once with the window's jerk: the way to come to rest
+        // without reversing that the check assumes (see `rests_forwards`). Braking for a
+        // feed hold (a target of zero) also above the target: a state that may not brake
+        // any harder before a drop in jerk eases first. Otherwise the target is the
+        // current piece's speed limit, and nothing goes above it.
+        let eased = x.v - x.a * x.a / (2.0 * w.jerk);
+        let eased = if target > 0.0 {
+            eased.min(target)
+        } else {
+            eased
+        };
+        candidates.push((eased, w.grip.at(x.v), w.jerk));
+    }
+    candidates.push((0.0, w.grip.at(peak_speed(x, w.jerk)), w.jerk));
     let mut fallback: Option<(Motion, bool)> = None;
     for &(low, accel, jerk) in &candidates {
-        let low = low.min(target).max(0.0);
+        let low = low.max(0.0);
         let brake = ramp_step(x, low, accel, jerk, dt);
         if !check(&brake, w) {
             // Kept for the fallback below: the slowest of the ramps that go on forwards (the
@@ -573,7 +626,14 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
             }
             continue;
         }
-        let (mut lo, mut hi) = (low, target);
+        // Ramps towards any speed above what one period can reach with the full jerk move
+        // alike over the period: searching only below that keeps the search fine where the
+        // answer is (a stop approached with a search over the whole feed ended 50 nm short).
+        let hi = target.min(reachable_speed(x, jerk, dt));
+        if low >= hi {
+            return brake;
+        }
+        let (mut lo, mut hi) = (low, hi);
         let mut best = brake;
         for _ in 0..BISECTION_STEPS {
             let mid = 0.5 * (lo + hi);
