@@ -1,7 +1,8 @@
 //! Property test for dense code: random smooth curves in short chords with coordinates
 //! rounded as a post-processor prints them, now and then a sharp corner, random limits and
 //! feeds. The path stays within the tolerance of the programmed polyline, every axis within
-//! its limits (finite differences, 1 % slack), and it ends exactly on the last point.
+//! its limits (finite differences, 1 % slack), and it ends exactly on the last point. The
+//! same holds with feed holds and override changes at random times.
 
 mod common;
 
@@ -283,4 +284,93 @@ proptest! {
     fn dense_code_stays_in_the_band_and_the_limits_and_ends_exactly(d in dense_strategy()) {
         check_dense(&d)?;
     }
+}
+
+/// An operator's actions during a dense program: at a time (s), a feed hold (for
+/// 0.01–0.5 s, by the second number) or an override (0.1–1.5, by it).
+type Controls = Vec<(f64, bool, f64)>;
+
+/// Controls at shares of a program's time at the feed.
+fn controls_strategy() -> impl Strategy<Value = Controls> {
+    prop::collection::vec((0.0f64..1.0, any::<bool>(), 0.0f64..1.0), 1..5)
+}
+
+/// Runs `d` with `controls` and checks the axis limits (1 % slack) and the exact end.
+fn check_controlled(d: &Dense, controls: &Controls) -> Result<(), TestCaseError> {
+    let pts = points(d);
+    prop_assume!(pts.len() > 10);
+    let ops: Vec<Op> = pts
+        .windows(2)
+        .enumerate()
+        .map(|(k, w)| line(k as u32 + 1, w[0], w[1], Feed::Rate(d.feed)))
+        .collect();
+    let (v, a, j) = d.limits;
+    let cfg = config(limits_xyz(v, a, j));
+    let act = |planner: &mut klar_motion::Planner, samples: &[klar_motion::Sample]| {
+        let t = samples.last().map_or(0.0, |s| s.t);
+        let (mut factor, mut held) = (1.0, false);
+        for &(at, hold, x) in controls.iter().filter(|c| c.0 <= t) {
+            if hold {
+                held |= t < at + 0.01 + 0.49 * x;
+            } else {
+                factor = 0.1 + 1.4 * x;
+            }
+        }
+        planner.set_feed_override(factor);
+        if held {
+            planner.hold();
+        } else {
+            planner.resume();
+        }
+    };
+    let run = run_controlled(cfg.clone(), pts[0], ops, act);
+    assert_within_limits(&cfg, &pts[0], &run.samples, 1.01);
+    let last = run.samples.last().expect("samples");
+    prop_assert!(
+        linear_distance(&last.pose, &pts[pts.len() - 1]) <= 1e-9,
+        "ends at {:?}",
+        last.pose
+    );
+    Ok(())
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(32))]
+    #[test]
+    fn dense_code_under_override_and_hold_keeps_the_limits_and_ends_exactly(
+        d in dense_strategy(),
+        shares in controls_strategy(),
+    ) {
+        let length = d.chord * d.chords as f64 / d.feed;
+        let controls = shares.iter().map(|&(t, hold, x)| (t * length, hold, x)).collect();
+        check_controlled(&d, &controls)?;
+    }
+}
+
+/// A wavy R25 helix in 0.09 mm chords whose jerk limits fall chord by chord (4772, 4519,
+/// 4288, 4079, 3915 mm/s³ …), with three feed holds. Braking for the third, the path's
+/// deceleration was judged with the current jerk up to the next drop and with that one's
+/// jerk after it, though its easing ran over several drops: it could not be eased in time,
+/// the speed went below zero and was clamped (X at three times its jerk limit). Now each
+/// drop along the easing is taken in turn.
+#[test]
+fn a_hold_over_a_staircase_of_falling_jerk_limits_stops_smoothly() {
+    let d = Dense {
+        radius: 24.918227552403327,
+        wave: (0.2174059533928404, 5.710191022646967),
+        chord: 0.09098185999989765,
+        chords: 1676,
+        round: 1e-4,
+        corner_every: 0,
+        feed: 190.1376551777259,
+        limits: (255.944554146952, 1175.9410766214291, 11163.832348370086),
+        rise: -1.5665005625217696,
+    };
+    let controls = vec![
+        (0.021534364451351554, true, 0.8764552265892327),
+        (0.6148503121103078, true, 0.5394841940731187),
+        (0.7860783303919491, true, 0.30533013909446766),
+    ];
+    let result = check_controlled(&d, &controls);
+    assert!(result.is_ok(), "{result:?}");
 }

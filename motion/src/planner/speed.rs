@@ -535,37 +535,40 @@ fn go_step(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         .unwrap_or(plain)
 }
 
-/// The nearest limit ahead of `x` where the jerk drops below the window's, and the place
-/// from which the period's action may already have that lower jerk: one period's travel
-/// before it (see `Planner::scan`).
-fn jerk_drop(x: &Motion, w: &Window) -> Option<(f64, f64)> {
-    let drop = w.limits.iter().find(|m| m.at > x.s && m.jerk < w.jerk)?;
-    let reach = period_travel(x.v, x.a, w.jerk, w.period);
-    Some((drop.jerk, (drop.at - reach).max(x.s)))
-}
-
 /// True when `x` can come to rest without reversing: a negative acceleration, brought to
-/// zero at once, leaves the speed at least zero. The easing has the window's jerk up to the
-/// next drop in jerk ahead ([`jerk_drop`]) and the lower jerk from there on, so a state that
-/// slows down to a standstill well before a piece with a lower jerk (a feed hold) is judged
-/// with the jerk it brakes with, and the judgement moves smoothly with the state as the drop
-/// comes near.
+/// zero at once, leaves the speed at least zero. The easing has the window's jerk up to
+/// one period's travel before the next limit ahead with a lower jerk (from there on the
+/// period's action may already have that jerk, see `Planner::scan`), then that lower jerk up
+/// to one period's travel before the next drop, and so on. So a state that slows down to a
+/// standstill well before a piece with a lower jerk (a feed hold) is judged with the jerk it
+/// brakes with, one whose easing runs over a staircase of falling jerk limits (dense code)
+/// with each of them, and the judgement moves smoothly with the state as the drops come
+/// near.
 fn rests_forwards(x: &Motion, w: &Window) -> bool {
     let rests = |m: &Motion, jerk: f64| m.v - m.a * m.a / (2.0 * jerk) >= -SPEED_SLACK;
     if x.a >= 0.0 {
         return true;
     }
-    if !rests(x, w.jerk) {
+    let (mut m, mut jerk) = (*x, w.jerk);
+    if !rests(&m, jerk) {
         return false;
     }
-    let Some((low, until)) = jerk_drop(x, w) else {
-        return true;
-    };
-    let room = until - x.s;
-    if easing_distance(x, 0.0, w.jerk) <= room {
-        return true;
+    let reach = period_travel(x.v, x.a, w.jerk, w.period);
+    for l in w.limits.iter().filter(|l| l.at > x.s) {
+        if l.jerk >= jerk {
+            continue;
+        }
+        let room = (l.at - reach - m.s).max(0.0);
+        if easing_distance(&m, 0.0, jerk) <= room {
+            return true;
+        }
+        m = eased_by(&m, room, jerk);
+        jerk = l.jerk;
+        if !rests(&m, jerk) {
+            return false;
+        }
     }
-    rests(&eased_by(x, room, w.jerk), low)
+    true
 }
 
 /// The speed above which every ramp from `x` with jerk `jerk` moves alike over the next
