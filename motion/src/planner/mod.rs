@@ -4,8 +4,9 @@
 //! are blended inside the active path tolerance ([`path`]); a jerk-limited speed generator
 //! moves along the blended path one servo period at a time ([`speed`]), looking ahead over
 //! the pieces within its braking distance (the window, in `scan.rs`). While TCPM is on,
-//! [`tcpm`] gives the program axes limits that keep the machine axes within theirs. There is no per-element profile: speed carries
-//! across elements, so short elements cost no time of their own.
+//! [`tcpm`] gives the program axes limits that keep the machine axes within theirs. There
+//! is no per-element profile: speed carries across elements, so short elements cost no time
+//! of their own.
 //!
 //! Ops without motion reach the caller as [`Step::Event`]s, in order, before the first
 //! sample taken after the path reaches the point where they take effect. These need the
@@ -19,7 +20,9 @@
 //!
 //! Feed override (0–150 %, [`Planner::set_feed_override`]) and feed hold
 //! ([`Planner::hold`], [`Planner::resume`]) act at once with jerk-limited speed changes on
-//! the path.
+//! the path. A hold stops where its braking ends; when that is a hair short of a stop point
+//! the path was braking for anyway, the rest of the way is travelled after the hold (no
+//! step onto the point).
 
 mod commit;
 mod drops;
