@@ -239,7 +239,7 @@ impl Quintic {
     }
 
     /// Bounds of |dⁿq/dsⁿ| per axis, n = 1, 2, 3, over the whole curve (see
-    /// [`super::bounds`]).
+    /// `blend::bounds`).
     pub fn bounds(&self) -> AxisBounds {
         self.bounds
     }

@@ -49,7 +49,7 @@ pub fn fill_table(table: &mut [f64], speed: impl Fn(f64) -> f64) {
 const COARSE_AGREEMENT: f64 = 1e-12;
 
 /// Fills `table` like [`fill_table`], but with two intervals when the quadrature on them
-/// already agrees with the one on the whole of [0, 1] to [`COARSE_AGREEMENT`] (a curve whose
+/// already agrees with the one on the whole of [0, 1] to `COARSE_AGREEMENT` (a curve whose
 /// parameter speed varies little); returns the number of intervals used (`table[..=n]`).
 pub fn fill_table_adaptive(table: &mut [f64], speed: impl Fn(f64) -> f64) -> usize {
     if table.len() > 3 {

@@ -19,8 +19,8 @@
 //! * otherwise a [`Quintic`] blend whose distance from the programmed contour is checked
 //!   against the tolerance ([`blend_within`]); it is made as long as the tolerance allows,
 //!   at most half of each element. A blend whose curvature varies along it (through a
-//!   corner, or from a line into an arc) is committed as [`BLEND_PARTS`] pieces, each with
-//!   the limits of its own stretch ([`Shape::bounds`]): the path slows down inside the
+//!   corner, or from a line into an arc) is committed as `BLEND_PARTS` pieces, each with
+//!   the limits of its own stretch (`Shape::bounds`): the path slows down inside the
 //!   blend, where the curvature grows, instead of before it.
 //!
 //! Split points make dense CAM code smooth. A short line between two gentle corners is
@@ -282,7 +282,7 @@ pub enum PieceError {
     Unplannable,
 }
 
-/// Path limits of a piece of `length` with derivative `bounds` ([`Shape::bounds`]), at
+/// Path limits of a piece of `length` with derivative `bounds` (`Shape::bounds`), at
 /// feed `feed`.
 pub fn piece_limits(
     bounds: &AxisBounds,

@@ -145,7 +145,7 @@ pub fn peak_speed(x: &Motion, jerk: f64) -> f64 {
 /// Distance the path needs from `x` to slow down to `target` (ending with zero
 /// acceleration) with the acceleration `grip` allows and jerk `jerk`: the shorter of one
 /// ramp with the grip of the highest speed, and a chain of ramps that switches to the grip
-/// of each knee ([`KNEE_SHARES`]) once the speed is below it. Each ramp of the chain ends at
+/// of each knee (`KNEE_SHARES`) once the speed is below it. Each ramp of the chain ends at
 /// its knee with zero acceleration, so the chain is a motion the actions can follow.
 /// Infinite when the grip leaves no acceleration at the start.
 pub fn brake_distance(x: &Motion, target: f64, grip: &Grip, jerk: f64) -> f64 {
