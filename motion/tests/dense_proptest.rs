@@ -103,18 +103,23 @@ fn to_segment(p: &Pose, a: &Pose, b: &Pose) -> f64 {
         .sqrt()
 }
 
-/// Runs `d` and checks the samples: within the axis limits (1 % slack), within the
-/// tolerance of the polyline, ending exactly on its last point.
-fn check_dense(d: &Dense) -> Result<(), TestCaseError> {
-    let pts = points(d);
-    prop_assume!(pts.len() > 10);
-    let ops: Vec<Op> = pts
+/// The chords through `pts` at `d`'s feed, and the planner configuration with its limits.
+fn program(d: &Dense, pts: &[Pose]) -> (Vec<Op>, klar_motion::PlannerConfig) {
+    let ops = pts
         .windows(2)
         .enumerate()
         .map(|(k, w)| line(k as u32 + 1, w[0], w[1], Feed::Rate(d.feed)))
         .collect();
     let (v, a, j) = d.limits;
-    let cfg = config(limits_xyz(v, a, j));
+    (ops, config(limits_xyz(v, a, j)))
+}
+
+/// Runs `d` and checks the samples: within the axis limits (1 % slack), within the
+/// tolerance of the polyline, ending exactly on its last point.
+fn check_dense(d: &Dense) -> Result<(), TestCaseError> {
+    let pts = points(d);
+    prop_assume!(pts.len() > 10);
+    let (ops, cfg) = program(d, &pts);
     let run = run(cfg.clone(), pts[0], ops);
     assert_within_limits(&cfg, &pts[0], &run.samples, 1.01);
     let last = run.samples.last().expect("samples");
@@ -310,13 +315,7 @@ fn controls_strategy() -> impl Strategy<Value = Controls> {
 fn check_controlled(d: &Dense, controls: &Controls) -> Result<(), TestCaseError> {
     let pts = points(d);
     prop_assume!(pts.len() > 10);
-    let ops: Vec<Op> = pts
-        .windows(2)
-        .enumerate()
-        .map(|(k, w)| line(k as u32 + 1, w[0], w[1], Feed::Rate(d.feed)))
-        .collect();
-    let (v, a, j) = d.limits;
-    let cfg = config(limits_xyz(v, a, j));
+    let (ops, cfg) = program(d, &pts);
     let act = |planner: &mut klar_motion::Planner, samples: &[klar_motion::Sample]| {
         let t = samples.last().map_or(0.0, |s| s.t);
         let (mut factor, mut held) = (1.0, false);
