@@ -51,21 +51,21 @@ pub const BUFFER_CAPACITY: usize = 20_000;
 /// The planner always continues from its own end point, so accepted gaps do not jump.
 pub const CONTINUITY_TOLERANCE: f64 = 1e-6;
 
-/// Distance (mm) within which a standstill counts as reaching a stop point.
+/// Distance (mm) by which the path may pass an event's point or overshoot a stop point
+/// before it counts as more than rounding (an overshoot beyond it is reported).
 const STOP_SNAP: f64 = 1e-6;
 
-/// Distance (mm) within which a standstill is on a point by rounding alone. A standstill
-/// short of a stop point by more is not put there at once: a feed hold brakes as soon as it
-/// is asked for and may come to rest just before a stop point it was braking for anyway, and
-/// putting the state on the point in one period would be a step of up to [`STOP_SNAP`] in
-/// position, a jerk of `STOP_SNAP / T³` (1000 mm/s³ at 1 ms). The rest of the way is
-/// travelled, jerk-limited, once the hold ends (the state is put on the point only when that
-/// braking ends within [`STOP_SNAP`] of it, with no hold in force).
+/// Distance (mm) within which a standstill is on a point by rounding alone: a stop marker
+/// takes effect, and the path is finished, only there.
 const ROUNDING: f64 = 1e-9;
 
-/// Share of the path's jerk limit that putting the state on a stop point may cost at most
-/// when it is not yet at rest there.
-const SNAP_JERK_SHARE: f64 = 1e-3;
+/// Share of the path's acceleration and jerk limits that putting the state on a stop point
+/// in one period may cost at most (its remaining way, speed and acceleration over T², T, 1
+/// and over T³, T², T). A state further from the point travels on: a feed hold that comes
+/// to rest a hair short of a stop point it was braking for anyway goes the rest of the way
+/// when it ends, with no step onto the point (1 µm in one period would be 1000 mm/s³ at
+/// 1 ms).
+const SNAP_SHARE: f64 = 1e-3;
 
 /// Elements kept back for corner decisions at least.
 const ELEMENTS_AHEAD: usize = 3;
@@ -513,12 +513,6 @@ impl Planner {
         self.state.v <= 1e-9 && self.state.a.abs() <= 1e-3
     }
 
-    /// Distance within which a standstill braked for a stop point is put on it (see
-    /// [`ROUNDING`]).
-    fn stop_snap(&self) -> f64 {
-        if self.held { ROUNDING } else { STOP_SNAP }
-    }
-
     /// The next sample or event; `None` once finished and drained (or, before
     /// [`Planner::finish`], when it needs input first).
     pub fn next_step(&mut self) -> Option<Step> {
@@ -629,14 +623,14 @@ impl Planner {
         if next.v < 0.0 {
             next.v = 0.0;
         }
-        // A standstill within rounding of the stop point is on it, and so is a state that
-        // the stop point is within a negligible jerk of (the last period of a stop that ends
-        // a hair short, with a speed of a few µm/s left).
+        // On the stop point when getting there in one step costs a negligible acceleration
+        // and jerk.
         let period = self.config.period;
-        let step_jerk =
-            (stop - next.s) / period.powi(3) + next.v / (period * period) + next.a.abs() / period;
-        let rests = next.v <= 1e-9 && next.a.abs() <= 1e-3 && stop - next.s <= self.stop_snap();
-        if rests || (next.s <= stop && step_jerk <= SNAP_JERK_SHARE * self.window.jerk) {
+        let step_accel = (stop - next.s) / (period * period) + next.v / period + next.a.abs();
+        let negligible = next.s <= stop
+            && step_accel / period <= SNAP_SHARE * self.window.jerk
+            && step_accel <= SNAP_SHARE * self.window.grip.most();
+        if negligible {
             next = Motion {
                 s: stop,
                 v: 0.0,
