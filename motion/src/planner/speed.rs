@@ -136,6 +136,12 @@ pub fn period_travel(v: f64, a: f64, jerk: f64, period: f64) -> f64 {
     v * period + a.abs() * period * period + jerk * period.powi(3)
 }
 
+/// The speed `x` settles at when its acceleration is brought to zero at once with jerk
+/// `jerk`: above its speed when it speeds up, below when it slows down.
+fn settled_speed(x: &Motion, jerk: f64) -> f64 {
+    x.v + x.a * x.a.abs() / (2.0 * jerk)
+}
+
 /// The highest speed `x` reaches when its acceleration is brought to zero at once.
 pub fn peak_speed(x: &Motion, jerk: f64) -> f64 {
     let a = x.a.max(0.0);
@@ -428,8 +434,8 @@ fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (Limit, f6
 /// True when `x` must slow down to meet limit `l` (or stop there: a stop is a point, not a
 /// region, so the distance to come to rest always counts).
 fn slows_for(x: &Motion, l: &Limit) -> bool {
-    let zeroed = x.v + x.a * x.a.abs() / (2.0 * l.jerk);
-    (l.speed <= 0.0 && x.v > 0.0) || zeroed > l.speed * (1.0 + LIMIT_SLACK) + LIMIT_SLACK
+    (l.speed <= 0.0 && x.v > 0.0)
+        || settled_speed(x, l.jerk) > l.speed * (1.0 + LIMIT_SLACK) + LIMIT_SLACK
 }
 
 /// True when the state is safe: every limit in the window can still be met, and the speed
@@ -545,7 +551,7 @@ fn go_step(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
 /// with each of them, and the judgement moves smoothly with the state as the drops come
 /// near.
 fn rests_forwards(x: &Motion, w: &Window) -> bool {
-    let rests = |m: &Motion, jerk: f64| m.v - m.a * m.a / (2.0 * jerk) >= -SPEED_SLACK;
+    let rests = |m: &Motion, jerk: f64| settled_speed(m, jerk) >= -SPEED_SLACK;
     if x.a >= 0.0 {
         return true;
     }
@@ -602,7 +608,7 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         // feed hold (a target of zero) also above the target: a state that may not brake
         // any harder before a drop in jerk eases first. Otherwise the target is the
         // current piece's speed limit, and nothing goes above it.
-        let eased = x.v - x.a * x.a / (2.0 * w.jerk);
+        let eased = settled_speed(x, w.jerk);
         let eased = if target > 0.0 {
             eased.min(target)
         } else {
