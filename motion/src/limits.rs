@@ -35,7 +35,8 @@
 //! uses the grip of the speed it is at. Where only the sum form applies, the curvature term
 //! gets at most half of the acceleration limit at the top speed and the rest is a constant
 //! limit. For the jerk, c₃·V³ gets at most half of the jerk limit and 3·c₂·v·A at most a
-//! quarter (0.6 in quadrature on arcs); J then takes what is left. The cross term holds at
+//! quarter (0.6 in quadrature on arcs); J then takes what is left. The parts of a corner
+//! blend keep less free at their top speed ([`Headroom`]). The cross term holds at
 //! every instant with that instant's speed too, so it caps the product v·A rather than A at
 //! the top speed: the grip allows `A(v) ≤ cross / v`, more acceleration at lower speeds
 //! (speeding up out of a curve, braking into one). On a line (c₂ = c₃ = 0) this is exactly
@@ -54,6 +55,9 @@ pub const CURVE_SHARE: f64 = 0.99;
 /// for the speed changes between them).
 const BLEND_CURVE_SHARE: f64 = 0.8;
 
+/// The curvature form's share on a part of a corner blend ([`Headroom::Lean`]).
+const LEAN_CURVE_SHARE: f64 = 0.99;
+
 /// Share of an axis's acceleration limit the curvature term may take where the terms add
 /// (no quadrature form applies).
 const SUM_CURVE_SHARE: f64 = 0.5;
@@ -61,6 +65,40 @@ const SUM_CURVE_SHARE: f64 = 0.5;
 /// Share of an axis's jerk limit the term c₃·V³ may take at the top speed of a piece (the
 /// jerk a curve causes at constant speed as its curvature turns or changes).
 const CURVE_JERK_SHARE: f64 = 0.5;
+
+/// The same on a part of a corner blend ([`Headroom::Lean`]): with a quarter of the limit
+/// for the cross term 3·c₂·v·A, a tenth is left for the path jerk at the top speed.
+const LEAN_CURVE_JERK_SHARE: f64 = 0.65;
+
+/// How much of each axis's acceleration and jerk a curved piece keeps free at its top
+/// speed for changing speed there. Any split keeps every axis within its limits (the
+/// acceleration and jerk the piece allows are what the curvature terms leave); it decides
+/// only how fast the piece may go against how quickly its speed may change at that speed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Headroom {
+    /// A piece the path may run along at its top speed and change speed on: elements,
+    /// splines and blends made of one piece (the curves through dense code). The
+    /// curvature form takes at most 0.8 of the acceleration at the top speed (0.6 left in
+    /// quadrature) and the curve's own jerk c₃·V³ at most half of the jerk.
+    Ample,
+    /// One of the parts of a corner blend whose curvature varies along it
+    /// (`planner::path`): the path slows down towards the corner's tightest part and
+    /// speeds up after it, so a part's top speed is a speed the path passes rather than
+    /// one it runs at, and the parts before and after it take the speed changes with
+    /// their own limits. The curvature form takes 0.99 of the acceleration at the top
+    /// speed (as on arcs) and c₃·V³ 0.65 of the jerk.
+    Lean,
+}
+
+impl Headroom {
+    /// Shares of the curvature form and of c₃·V³ at the top speed.
+    fn shares(self) -> (f64, f64) {
+        match self {
+            Headroom::Ample => (BLEND_CURVE_SHARE, CURVE_JERK_SHARE),
+            Headroom::Lean => (LEAN_CURVE_SHARE, LEAN_CURVE_JERK_SHARE),
+        }
+    }
+}
 
 /// Share of an axis's jerk limit the term 3·c₂·V·A may take on an arc (0.8 of the limit is
 /// left in quadrature for the path jerk and c₃·V³).
@@ -184,7 +222,7 @@ impl Moving {
     /// The quadrature forms of this axis as grips (peak, bend): the arc form with the end
     /// correction folded in (`√((W·A)² + X²) + o·A ≤ a_max` holds for `A = √(ã² − X²)/c₁`
     /// with `ã = a_max·W/c₁`: o·A ≤ o·a_max/c₁ and W ≤ c₁), and the curvature form.
-    fn curves(&self) -> [Option<(f64, f64, f64)>; 2] {
+    fn curves(&self, blend_share: f64) -> [Option<(f64, f64, f64)>; 2] {
         let a = self.l.max_acceleration;
         let wave = (self.wave > 0.0 && self.c1 > 0.0).then(|| {
             (
@@ -193,7 +231,7 @@ impl Moving {
                 CURVE_SHARE,
             )
         });
-        let kappa = (self.kappa > 0.0).then_some((a, self.kappa, BLEND_CURVE_SHARE));
+        let kappa = (self.kappa > 0.0).then_some((a, self.kappa, blend_share));
         [wave, kappa]
     }
 }
@@ -206,13 +244,16 @@ pub enum LimitError {
 }
 
 /// Path limits of a segment of `length` with derivative `bounds`, at the programmed path
-/// speed `feed` (`None` for rapid traverse: as fast as the axes allow).
+/// speed `feed` (`None` for rapid traverse: as fast as the axes allow), keeping `headroom`
+/// at the top speed.
 pub fn path_limits(
     bounds: &AxisBounds,
     length: f64,
     limits: &[Option<AxisLimits>; 9],
     feed: Option<f64>,
+    headroom: Headroom,
 ) -> Result<PieceLimits, LimitError> {
+    let (blend_share, curve_jerk_share) = headroom.shares();
     let mut moving: [Option<Moving>; 9] = [None; 9];
     for (i, axis) in AxisLetter::ALL.into_iter().enumerate() {
         let (c1, c2, c3) = (bounds.d1[i], bounds.d2[i], bounds.d3[i]);
@@ -248,13 +289,13 @@ pub fn path_limits(
         }
         if m.c2 > 0.0 {
             let mut top = (SUM_CURVE_SHARE * l.max_acceleration / m.c2).sqrt();
-            for (peak, bend, share) in m.curves().into_iter().flatten() {
+            for (peak, bend, share) in m.curves(blend_share).into_iter().flatten() {
                 top = top.max((share * peak / bend).sqrt());
             }
             v = v.min(top);
         }
         if m.c3 > 0.0 {
-            v = v.min((CURVE_JERK_SHARE * l.max_jerk / m.c3).cbrt());
+            v = v.min((curve_jerk_share * l.max_jerk / m.c3).cbrt());
         }
     }
     let mut grip = Grip::constant(f64::INFINITY);
@@ -271,7 +312,7 @@ pub fn path_limits(
         };
         // The quadrature form that allows most at the top speed, if it beats the sum.
         let best = m
-            .curves()
+            .curves(blend_share)
             .into_iter()
             .flatten()
             .map(|(peak, bend, _)| {
@@ -362,7 +403,13 @@ mod tests {
         let Some(arc) = arc else {
             panic!("a full circle is an arc")
         };
-        let l = path_limits(&arc.bounds(), arc.length(), &xyz(500.0, 1000.0, jerk), None);
+        let l = path_limits(
+            &arc.bounds(),
+            arc.length(),
+            &xyz(500.0, 1000.0, jerk),
+            None,
+            Headroom::Ample,
+        );
         let Ok(l) = l else { panic!("limits") };
         l
     }
@@ -449,6 +496,50 @@ mod tests {
                     m.at(v)
                 );
             }
+        }
+    }
+
+    #[test]
+    fn a_corner_blend_part_goes_faster_and_keeps_every_axis_within_its_limits() {
+        // The bounds of the third of four parts of the blend from a line into a 1 mm arc
+        // (the bench square's corner, tolerance 0.01 mm): X along the line, Y turning in.
+        let mut b = AxisBounds {
+            d1: [0.0; 9],
+            d2: [0.0; 9],
+            d3: [0.0; 9],
+            wave: [0.0; 9],
+            curvature: 0.996,
+        };
+        (b.d1[0], b.d1[1]) = (1.0, 0.317);
+        (b.d2[0], b.d2[1]) = (0.315, 0.947);
+        (b.d3[0], b.d3[1]) = (1.338, 1.652);
+        let (a_max, j_max) = (1000.0, 1e5);
+        let axes = xyz(100.0, a_max, j_max);
+        let limits = |h| match path_limits(&b, 0.35, &axes, None, h) {
+            Ok(l) => l,
+            Err(e) => panic!("{e:?}"),
+        };
+        let (ample, lean) = (limits(Headroom::Ample), limits(Headroom::Lean));
+        // Ample: the curvature form takes 0.8 of the acceleration at the top speed.
+        let top = (0.8 * a_max / 0.996f64).sqrt();
+        assert!((ample.velocity - top).abs() < 1e-9, "{}", ample.velocity);
+        assert!(lean.velocity > 1.05 * ample.velocity, "{}", lean.velocity);
+        for l in [ample, lean] {
+            // At every speed up to the top one, with the grip of that speed and the path
+            // jerk: each axis's acceleration within the sum or the curvature form, its
+            // jerk within the sum of the magnitudes of its three terms.
+            for k in 0..=20 {
+                let v = l.velocity * f64::from(k) / 20.0;
+                let a = l.grip.at(v);
+                for i in 0..2 {
+                    let sum = b.d1[i] * a + b.d2[i] * v * v;
+                    let quadrature = a.hypot(b.curvature * v * v);
+                    assert!(sum.min(quadrature) <= a_max * (1.0 + 1e-12), "{v}: {a}");
+                    let jerk = b.d1[i] * l.jerk + 3.0 * b.d2[i] * v * a + b.d3[i] * v.powi(3);
+                    assert!(jerk <= j_max * (1.0 + 1e-12), "{v}: {a} {}", l.jerk);
+                }
+            }
+            assert!(l.jerk > 0.0 && l.grip.at(l.velocity) > 0.0);
         }
     }
 }

@@ -2,7 +2,7 @@
 //! decided, the vertices of the polyline around it, and the pieces, stops and events the
 //! commit produces.
 
-use super::path::{Committed, Element, Piece, Shape, Vertices, commit, piece_limits};
+use super::path::{Committed, Element, NewPiece, Piece, Shape, Vertices, commit, piece_limits};
 use super::{Marker, Planner, path, piece_error, smooth, speed};
 use crate::error::MotionError;
 use crate::geom::Metric;
@@ -127,13 +127,21 @@ impl Planner {
             self.add_stop(self.committed_end);
         }
         let mut events_at = self.committed_end;
-        for (shape, offset, length, feed, loc) in done.pieces {
+        for new in done.pieces {
+            let NewPiece {
+                shape,
+                offset,
+                length,
+                feed,
+                loc,
+                headroom,
+            } = new;
             let is_element = matches!(shape, Shape::Element(_));
             // A blend's part has bounds of its own: computed once for both uses.
             let bounds = shape.bounds(offset, length);
             let limits = self.limits_for(&shape, &bounds, offset, length);
-            let l =
-                piece_limits(&bounds, length, feed, &limits).map_err(|e| piece_error(e, loc))?;
+            let l = piece_limits(&bounds, length, feed, &limits, headroom)
+                .map_err(|e| piece_error(e, loc))?;
             let mut piece = Piece {
                 drop: false,
                 shape,

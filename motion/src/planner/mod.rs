@@ -37,6 +37,7 @@ pub use tcpm::{TCPM_DERATE, TableGeometry};
 use crate::config::{AxisLimits, PlannerConfig};
 use crate::error::MotionError;
 use crate::geom::{Arc, AxisBounds, GeomError, Line, Poly, Segment, finite_pose, letter};
+use crate::limits::Headroom;
 use crate::profile::Ramp;
 use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
 use path::{Element, MAX_OVERRIDE, Piece, PieceError, Shape, Waiting, piece_limits};
@@ -446,7 +447,8 @@ impl Planner {
         let whole = Shape::Element(segment.clone());
         let bounds = segment.bounds();
         let limits = self.limits_for(&whole, &bounds, 0.0, segment.length());
-        piece_limits(&bounds, segment.length(), feed, &limits).map_err(|e| piece_error(e, loc))?;
+        piece_limits(&bounds, segment.length(), feed, &limits, Headroom::Ample)
+            .map_err(|e| piece_error(e, loc))?;
         self.planned_pose = segment.end();
         self.waiting.push_back(Waiting {
             element: Element {

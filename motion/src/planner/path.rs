@@ -39,7 +39,7 @@ use super::smooth::{Stencil, end_point, split_point};
 use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, Line, Metric, PathPoint, Segment};
-use crate::limits::{Grip, LimitError, PieceLimits, path_limits};
+use crate::limits::{Grip, Headroom, LimitError, PieceLimits, path_limits};
 use klar_interp::{Op, Pose, SourceLoc};
 
 /// Largest feed override, as a factor: path limits are prepared for it.
@@ -226,8 +226,22 @@ impl Element {
     }
 }
 
-/// A new piece: its shape, where on the shape it starts, its length, feed and block.
-pub type NewPiece = (Shape, f64, f64, Option<f64>, SourceLoc);
+/// A new piece, before its limits are known.
+#[derive(Debug)]
+pub struct NewPiece {
+    /// The geometry.
+    pub shape: Shape,
+    /// Where on the shape it starts.
+    pub offset: f64,
+    /// Its length.
+    pub length: f64,
+    /// Programmed feed (`None`: rapid).
+    pub feed: Option<f64>,
+    /// The block it comes from.
+    pub loc: SourceLoc,
+    /// What its limits keep free at its top speed.
+    pub headroom: Headroom,
+}
 
 /// The pieces committing one element produces: the element's own part and the blend after
 /// it, kept inline (no allocation per element); any further piece goes to `more`.
@@ -283,18 +297,24 @@ pub enum PieceError {
 }
 
 /// Path limits of a piece of `length` with derivative `bounds` (`Shape::bounds`), at
-/// feed `feed`.
+/// feed `feed`, keeping `headroom` at its top speed.
 pub fn piece_limits(
     bounds: &AxisBounds,
     length: f64,
     feed: Option<f64>,
     limits: &[Option<AxisLimits>; 9],
+    headroom: Headroom,
 ) -> Result<PieceLimits, PieceError> {
-    let l = path_limits(bounds, length, limits, feed.map(|f| f * MAX_OVERRIDE)).map_err(
-        |e| match e {
-            LimitError::AbsentAxis(a) => PieceError::Absent(a),
-        },
-    )?;
+    let l = path_limits(
+        bounds,
+        length,
+        limits,
+        feed.map(|f| f * MAX_OVERRIDE),
+        headroom,
+    )
+    .map_err(|e| match e {
+        LimitError::AbsentAxis(a) => PieceError::Absent(a),
+    })?;
     let usable = |x: f64| x.is_finite() && x > 0.0;
     if usable(l.velocity) && usable(l.acceleration) && usable(l.jerk) {
         Ok(l)
@@ -320,9 +340,15 @@ fn jump_fits(
     period: f64,
 ) -> bool {
     let top = |e: &Element| {
-        piece_limits(&e.segment.bounds(), e.segment.length(), e.feed, limits)
-            .ok()
-            .map(|l| l.velocity)
+        piece_limits(
+            &e.segment.bounds(),
+            e.segment.length(),
+            e.feed,
+            limits,
+            Headroom::Ample,
+        )
+        .ok()
+        .map(|l| l.velocity)
     };
     let (Some(a), Some(b)) = (top(cur), top(next)) else {
         return false;
@@ -431,13 +457,14 @@ fn detach_split(cur: &mut Element) {
 /// The element's own part from `from` to `to`, if it has length.
 fn push_part(out: &mut Committed, e: &Element, from: f64, to: f64) {
     if to - from > 1e-12 {
-        out.pieces.push((
-            Shape::Element(e.segment.clone()),
-            from,
-            to - from,
-            e.feed,
-            e.loc,
-        ));
+        out.pieces.push(NewPiece {
+            shape: Shape::Element(e.segment.clone()),
+            offset: from,
+            length: to - from,
+            feed: e.feed,
+            loc: e.loc,
+            headroom: Headroom::Ample,
+        });
     }
 }
 
@@ -456,11 +483,19 @@ fn too_slow(
     next: &Element,
     limits: &[Option<AxisLimits>; 9],
 ) -> bool {
-    let Ok(b) = piece_limits(&blend.bounds(), length, feed, limits) else {
+    let Ok(b) = piece_limits(&blend.bounds(), length, feed, limits, Headroom::Ample) else {
         return true;
     };
-    let side =
-        |e: &Element| piece_limits(&e.segment.bounds(), e.segment.length(), e.feed, limits).ok();
+    let side = |e: &Element| {
+        piece_limits(
+            &e.segment.bounds(),
+            e.segment.length(),
+            e.feed,
+            limits,
+            Headroom::Ample,
+        )
+        .ok()
+    };
     let (Some(l), Some(r)) = (side(cur), side(next)) else {
         return true;
     };
@@ -594,11 +629,22 @@ fn try_corner(
             };
             let shape = Shape::Blend(curve);
             let step = length / parts as f64;
+            let headroom = if parts > 1 {
+                Headroom::Lean
+            } else {
+                Headroom::Ample
+            };
             for k in 0..parts {
                 let from = step * k as f64;
                 let to = if k + 1 == parts { length } else { from + step };
-                out.pieces
-                    .push((shape.clone(), from, to - from, feed, next.loc));
+                out.pieces.push(NewPiece {
+                    shape: shape.clone(),
+                    offset: from,
+                    length: to - from,
+                    feed,
+                    loc: next.loc,
+                    headroom,
+                });
             }
             next.trim = dr;
             next.split = right_split;
@@ -770,8 +816,14 @@ fn run_to(
     let length = curve.length();
     let mut out = Committed::default();
     let last = &mut rest[m].element;
-    out.pieces
-        .push((Shape::Blend(curve), 0.0, length, feed, last.loc));
+    out.pieces.push(NewPiece {
+        shape: Shape::Blend(curve),
+        offset: 0.0,
+        length,
+        feed,
+        loc: last.loc,
+        headroom: Headroom::Ample,
+    });
     if to_end {
         out.consumed = m + 1;
         out.stop_at_end = true;
