@@ -285,6 +285,22 @@ fn programs_that_once_went_over_a_limit_stay_within_them() {
             limits: (289.3032123015573, 1629.1210260430203, 23011.238861272443),
             rise: -3.961609539573245,
         },
+        // An R4.5 wave in 0.015 mm chords rounded to 0.1 µm with a 90° corner every 80
+        // chords, jerk limit 66 500 mm/s³: when a piece shared a lower jerk limit only with
+        // its neighbour's own limit (not one the neighbour took from the piece before it),
+        // a corner stop was reached still braking (0.04 mm/s, −59 mm/s²) and X stepped to
+        // 2.2× its jerk limit.
+        Dense {
+            radius: 4.498684721188688,
+            wave: (0.1281693087960613, 3.0306814211467725),
+            chord: 0.014790542576292311,
+            chords: 320,
+            round: 0.0001,
+            corner_every: 80,
+            feed: 113.98166087593096,
+            limits: (174.3009624168831, 736.787290489304, 66496.85960544352),
+            rise: 0.0,
+        },
     ];
     for d in &cases {
         if let Err(e) = check_dense(d) {

