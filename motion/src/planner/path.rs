@@ -323,6 +323,12 @@ pub fn piece_limits(
     }
 }
 
+/// Path limits of a whole element (`None` where none can be derived).
+fn element_limits(e: &Element, limits: &[Option<AxisLimits>; 9]) -> Option<PieceLimits> {
+    let (bounds, length) = (e.segment.bounds(), e.segment.length());
+    piece_limits(&bounds, length, e.feed, limits, Headroom::Ample).ok()
+}
+
 fn angle(a: &[f64; 9], b: &[f64; 9]) -> f64 {
     let m = Metric::Linear;
     let c = m.dot(a, b) / (m.norm(a) * m.norm(b)).max(f64::MIN_POSITIVE);
@@ -339,17 +345,7 @@ fn jump_fits(
     limits: &[Option<AxisLimits>; 9],
     period: f64,
 ) -> bool {
-    let top = |e: &Element| {
-        piece_limits(
-            &e.segment.bounds(),
-            e.segment.length(),
-            e.feed,
-            limits,
-            Headroom::Ample,
-        )
-        .ok()
-        .map(|l| l.velocity)
-    };
+    let top = |e: &Element| element_limits(e, limits).map(|l| l.velocity);
     let (Some(a), Some(b)) = (top(cur), top(next)) else {
         return false;
     };
@@ -486,17 +482,7 @@ fn too_slow(
     let Ok(b) = piece_limits(&blend.bounds(), length, feed, limits, Headroom::Ample) else {
         return true;
     };
-    let side = |e: &Element| {
-        piece_limits(
-            &e.segment.bounds(),
-            e.segment.length(),
-            e.feed,
-            limits,
-            Headroom::Ample,
-        )
-        .ok()
-    };
-    let (Some(l), Some(r)) = (side(cur), side(next)) else {
+    let (Some(l), Some(r)) = (element_limits(cur, limits), element_limits(next, limits)) else {
         return true;
     };
     b.velocity < SLOW_BLEND * l.velocity.min(r.velocity)
