@@ -6,6 +6,7 @@ use super::path::{Committed, Element, NewPiece, Piece, Shape, Vertices, commit, 
 use super::{Marker, Planner, path, piece_error, smooth, speed};
 use crate::error::MotionError;
 use crate::geom::Metric;
+use crate::limits::Headroom;
 
 /// Elements kept back at most: more wait while the lines after the next corner but one
 /// are shorter than a run of dense code and the split-point fit at its end reach
@@ -24,10 +25,15 @@ const AHEAD_REACH: f64 = path::RUN_LENGTH + smooth::SPAN;
 const SHARED_PERIODS: f64 = 2.0;
 
 /// The stretch of `piece` next to a neighbour with a lower jerk limit that takes that
-/// limit, when the piece is an element more than twice that long (a blend keeps its parts'
-/// own bounds, so it is never cut).
+/// limit, when the piece is an element or a part of a corner blend more than twice that
+/// long (the cut keeps the piece's limits, which hold on any stretch of it). Blends through
+/// dense code are not cut: that would cost a tenth of the planning throughput in pieces.
 fn shared_stretch(piece: &Piece, period: f64) -> Option<f64> {
-    if !matches!(piece.shape, Shape::Element(_)) {
+    let cuttable = match piece.shape {
+        Shape::Element(_) => true,
+        Shape::Blend(_) => piece.headroom == Headroom::Lean,
+    };
+    if !cuttable {
         return None;
     }
     let reach = speed::period_travel(piece.vmax, piece.grip.most(), piece.jerk, period);
@@ -152,6 +158,7 @@ impl Planner {
                 feed,
                 grip: l.grip,
                 jerk: l.jerk,
+                headroom,
                 loc,
             };
             piece.drop = self.drops.next(piece.speed_limit(1.0));
@@ -247,5 +254,104 @@ impl Planner {
             op: None,
             dwell: 0.0,
         });
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::blend::Quintic;
+    use crate::config::{AxisLimits, PlannerConfig};
+    use crate::geom::{Line, PathPoint, Segment};
+    use crate::limits::Grip;
+    use klar_interp::{Pose, SourceLoc};
+
+    fn planner() -> Planner {
+        let l = AxisLimits {
+            max_velocity: 100.0,
+            max_acceleration: 1000.0,
+            max_jerk: 1e5,
+        };
+        let mut limits = [None; 9];
+        limits[..3].fill(Some(l));
+        let config = PlannerConfig {
+            limits,
+            period: 0.001,
+            tolerance: 0.01,
+        };
+        match Planner::new(config, Pose::xyz(0.0, 0.0, 0.0)) {
+            Ok(p) => p,
+            Err(e) => panic!("{e}"),
+        }
+    }
+
+    /// A piece along X from `start` over `length` with jerk limit `jerk`: a line, or a
+    /// (straight) blend with `headroom`.
+    fn piece(start: f64, length: f64, jerk: f64, blend: Option<Headroom>) -> Piece {
+        let (from, to) = (
+            Pose::xyz(start, 0.0, 0.0),
+            Pose::xyz(start + length, 0.0, 0.0),
+        );
+        let shape = match blend {
+            None => match Line::new(from, to) {
+                Ok(Some(line)) => Shape::Element(Segment::Line(line)),
+                _ => panic!("a line"),
+            },
+            Some(_) => {
+                let mut d1 = [0.0; 9];
+                d1[0] = 1.0;
+                let at = |pose| PathPoint {
+                    pose,
+                    d1,
+                    d2: [0.0; 9],
+                };
+                match Quintic::hermite(&at(from), &at(to)) {
+                    Some(q) => Shape::Blend(Box::new(q)),
+                    None => panic!("a blend"),
+                }
+            }
+        };
+        Piece {
+            shape,
+            offset: 0.0,
+            length,
+            start,
+            vmax: 30.0,
+            feed: None,
+            grip: Grip::constant(1000.0),
+            jerk,
+            headroom: blend.unwrap_or(Headroom::Ample),
+            loc: SourceLoc::default(),
+            drop: false,
+        }
+    }
+
+    /// Jerk limits and lengths of the planner's pieces.
+    fn jerks(p: &Planner) -> Vec<(f64, f64)> {
+        p.pieces.iter().map(|q| (q.jerk, q.length)).collect()
+    }
+
+    #[test]
+    fn a_corner_blend_part_shares_a_lower_jerk_near_the_joint_only() {
+        // After a piece with jerk limit 5e4, a part of a corner blend 0.3 mm long takes that
+        // limit over two periods' travel at its top speed (2 × 0.031 mm with its
+        // acceleration), cut off as a piece of its own; a blend through dense code takes it
+        // over all of its length.
+        for (headroom, cut) in [(Headroom::Lean, true), (Headroom::Ample, false)] {
+            let mut p = planner();
+            p.push_piece(piece(0.0, 10.0, 1e5, None));
+            p.push_piece(piece(10.0, 0.3, 5e4, None));
+            p.push_piece(piece(10.3, 0.3, 1e5, Some(headroom)));
+            let got = jerks(&p);
+            if cut {
+                assert_eq!(got.len(), 4, "{got:?}");
+                assert_eq!((got[2].0, got[3].0), (5e4, 1e5));
+                assert!((got[2].1 - 0.0622).abs() < 1e-3, "{got:?}");
+                assert!((got[2].1 + got[3].1 - 0.3).abs() < 1e-12, "{got:?}");
+            } else {
+                assert_eq!(got.len(), 3, "{got:?}");
+                assert_eq!(got[2], (5e4, 0.3));
+            }
+        }
     }
 }

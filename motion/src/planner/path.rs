@@ -126,6 +126,8 @@ pub struct Piece {
     pub grip: Grip,
     /// Path jerk limit.
     pub jerk: f64,
+    /// What its limits keep free at its top speed.
+    pub headroom: Headroom,
     /// The block it comes from.
     pub loc: SourceLoc,
     /// True when its speed limit at the programmed feed lies a real step below the pieces
