@@ -3,22 +3,22 @@
 //! commit produces.
 
 use super::path::{Committed, Element, NewPiece, Piece, Shape, Vertices, commit, piece_limits};
-use super::{Marker, Planner, path, piece_error, smooth, speed};
+use super::{Marker, Planner, path, piece_error, run, smooth, speed};
 use crate::error::MotionError;
 use crate::geom::Metric;
 use crate::limits::Headroom;
 
 /// Elements kept back at most: more wait while the lines after the next corner but one
 /// are shorter than a run of dense code and the split-point fit at its end reach
-/// ([`path::RUN_ELEMENTS`], [`smooth::SPAN`]).
-const ELEMENTS_AHEAD_MAX: usize = path::RUN_ELEMENTS + smooth::LOOK + 2;
+/// ([`run::RUN_ELEMENTS`], [`smooth::SPAN`]).
+const ELEMENTS_AHEAD_MAX: usize = run::RUN_ELEMENTS + smooth::LOOK + 2;
 
 /// Polyline vertices kept behind the corner being decided, for the split-point fit.
 const VERTICES_BEHIND: usize = smooth::LOOK;
 
 /// Path length (mm) of the lines waiting after the next corner but one that lets the front
 /// element's corner be decided: a run and the fit at its end.
-const AHEAD_REACH: f64 = path::RUN_LENGTH + smooth::SPAN;
+const AHEAD_REACH: f64 = run::RUN_LENGTH + smooth::SPAN;
 
 /// Periods of travel at a piece's top speed over which it shares a lower jerk limit with its
 /// neighbour when it is long enough to be cut ([`Planner::push_piece`]).

@@ -27,6 +27,7 @@
 mod commit;
 mod drops;
 pub mod path;
+mod run;
 mod scan;
 pub mod smooth;
 pub mod speed;

@@ -28,14 +28,15 @@
 //! fitted to the polyline around it ([`split_point`]: position, tangent and curvature
 //! vector), instead of the line's own direction and zero curvature. Once the path runs
 //! through split points, a blend does not stop at the next one: it spans a *run* of short
-//! lines up to [`RUN_LENGTH`], from one split point to one far ahead, and uses up the lines
-//! between ([`Committed::consumed`]). The fitted points carry the rounding noise of the
-//! program's coordinates; a blend between points 0.01 mm apart would turn that noise into a
-//! large third derivative (the jerk of the curve at constant speed), one over a run barely
-//! notices it. A polyline approximating a circle then becomes a curve of almost constant
+//! lines up to 1 mm (`RUN_LENGTH`, `run.rs`), from one split point to one far ahead, and
+//! uses up the lines between ([`Committed::consumed`]). The fitted points carry the
+//! rounding noise of the program's coordinates; a blend between points 0.01 mm apart would
+//! turn that noise into a large third derivative (the jerk of the curve at constant speed),
+//! one over a run barely notices it. A polyline approximating a circle then becomes a curve of almost constant
 //! curvature, followed at the programmed feed.
 
-use super::smooth::{Stencil, end_point, split_point};
+use super::run;
+use super::smooth::{Stencil, split_point};
 use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, Line, Metric, PathPoint, Segment};
@@ -213,7 +214,7 @@ pub struct Vertices<'a> {
 
 impl<'a> Vertices<'a> {
     /// The stencil of the `j`-th element after the one being committed.
-    fn around(&self, j: usize) -> Stencil<'a> {
+    pub(super) fn around(&self, j: usize) -> Stencil<'a> {
         let i = (self.first + j).min(self.all.len());
         let (behind, ahead) = self.all.split_at((i + 1).min(self.all.len()));
         Stencil { behind, ahead }
@@ -254,7 +255,7 @@ pub struct NewPieces {
 }
 
 impl NewPieces {
-    fn push(&mut self, piece: NewPiece) {
+    pub(super) fn push(&mut self, piece: NewPiece) {
         match self.slots.iter_mut().find(|s| s.is_none()) {
             Some(slot) => *slot = Some(piece),
             None => self.more.push(piece),
@@ -331,7 +332,7 @@ fn element_limits(e: &Element, limits: &[Option<AxisLimits>; 9]) -> Option<Piece
     piece_limits(&bounds, length, e.feed, limits, Headroom::Ample).ok()
 }
 
-fn angle(a: &[f64; 9], b: &[f64; 9]) -> f64 {
+pub(super) fn angle(a: &[f64; 9], b: &[f64; 9]) -> f64 {
     let m = Metric::Linear;
     let c = m.dot(a, b) / (m.norm(a) * m.norm(b)).max(f64::MIN_POSITIVE);
     c.clamp(-1.0, 1.0).acos()
@@ -383,7 +384,7 @@ pub fn commit(
 ) -> Committed {
     let mut out = Committed::default();
     if (cur.split.is_some() || cur.from_rest)
-        && let Some(done) = try_run(cur, rest, last, vertices)
+        && let Some(done) = run::try_run(cur, rest, last, vertices)
     {
         return done;
     }
@@ -598,10 +599,7 @@ fn try_corner(
         ];
         if let Some((curve, _)) = blend_within(&a, &b, &contour, tol) {
             let length = curve.length();
-            let feed = match (cur.feed, next.feed) {
-                (Some(x), Some(y)) => Some(x.min(y)),
-                (x, y) => x.or(y),
-            };
+            let feed = min_feed(cur.feed, next.feed);
             if theta > SPLIT_MAX_ANGLE && too_slow(&curve, length, feed, cur, next, limits) {
                 return None;
             }
@@ -649,176 +647,17 @@ fn try_corner(
     None
 }
 
-/// Path length (mm) a blend through dense code spans at most: a run of short lines is
-/// blended as one curve between split points this far apart, over which the noise of their
-/// fits ([`split_point`]) bends the curve far less than between neighbouring chords.
-pub const RUN_LENGTH: f64 = 1.0;
-
-/// Lines a run spans at most.
-pub const RUN_ELEMENTS: usize = 64;
-
-/// True for a line that moves linear axes only (runs leave rotary moves, whose limits
-/// depend on the machine's kinematics along the way, to blends between neighbours).
-fn linear_only(e: &Element) -> bool {
-    e.is_linear_line() && Metric::Rotary.norm(&e.segment.point(0.0).d1) == 0.0
-}
-
 /// True when a line of length `len` whose ends turn by at most `turn` (radians) may lie
 /// inside a blend through split points in tolerance `tol`: a gentle turn, and the line's
 /// sagitta-like offset `len·turn` within twice the tolerance.
-fn gentle(len: f64, turn: f64, tol: f64) -> bool {
+pub(super) fn gentle(len: f64, turn: f64, tol: f64) -> bool {
     turn <= SPLIT_MAX_ANGLE && len * turn <= 2.0 * tol
 }
 
 /// The lower of two feeds (`None`: rapid, the higher of any).
-fn min_feed(x: Option<f64>, y: Option<f64>) -> Option<f64> {
+pub(super) fn min_feed(x: Option<f64>, y: Option<f64>) -> Option<f64> {
     match (x, y) {
         (Some(x), Some(y)) => Some(x.min(y)),
         (x, y) => x.or(y),
     }
-}
-
-/// Blends a run of dense code: from the split point `cur` starts at (or its start, where
-/// the path stands still) to the split point of a later short line, using up the short
-/// lines between. The run ends at the last line within [`RUN_LENGTH`] whose corners a split
-/// point allows, or at the end of the last line before a stop (`last`); where the blend
-/// leaves the tolerance band, runs half as long are tried. `None` when no run of at least
-/// two lines fits (the corner is then decided as usual).
-fn try_run(
-    cur: &Element,
-    rest: &mut [Waiting],
-    last: bool,
-    vertices: &Vertices<'_>,
-) -> Option<Committed> {
-    if !linear_only(cur) {
-        return None;
-    }
-    let len = cur.segment.length();
-    let mut tol = cur.tolerance;
-    let mut reach = len - cur.trim;
-    let mut prev = cur.segment.point(len).d1;
-    let mut longest = 0;
-    let mut to_stop = None;
-    for j in 0..rest.len().min(RUN_ELEMENTS + 1) {
-        let e = &rest[j].element;
-        if !linear_only(e) {
-            break;
-        }
-        let lj = e.segment.length();
-        let dir = e.segment.point(0.0).d1;
-        let t = tol.min(e.tolerance);
-        let Some(after) = rest.get(j + 1).map(|w| &w.element) else {
-            // The last line before a stop: the run may end at its end.
-            let turn = angle(&prev, &dir);
-            if last && turn <= SPLIT_MAX_ANGLE && lj * turn <= 2.0 * t && reach + lj <= RUN_LENGTH {
-                to_stop = Some((j, t));
-            }
-            break;
-        };
-        let turn = angle(&prev, &dir).max(angle(&dir, &after.segment.point(0.0).d1));
-        if after.segment.metric() != Metric::Linear
-            || !gentle(lj, turn, t)
-            || t.min(after.tolerance) <= 0.0
-            || reach + 0.5 * lj > RUN_LENGTH
-        {
-            break;
-        }
-        tol = t;
-        longest = j;
-        reach += lj;
-        prev = dir;
-    }
-    if tol <= 0.0 || (longest == 0 && to_stop.is_none()) {
-        return None;
-    }
-    let start = match cur.split {
-        Some(p) => p,
-        None if cur.from_rest && cur.trim == 0.0 => {
-            let Segment::Line(line) = &cur.segment else {
-                return None;
-            };
-            // The vertices from the line's end on.
-            let ahead = vertices.around(0);
-            end_point(line, false, &ahead, SPLIT_MAX_ANGLE)?
-        }
-        None => return None,
-    };
-    if let Some((j, t)) = to_stop
-        && let Some(done) = run_to(cur, rest, j, &start, t, vertices, true)
-    {
-        return Some(done);
-    }
-    let mut m = longest;
-    while m >= 1 {
-        if let Some(done) = run_to(cur, rest, m, &start, tol, vertices, false) {
-            return Some(done);
-        }
-        m /= 2;
-    }
-    None
-}
-
-/// The run from `start` to the split point of the `m`-th waiting element (or to its end,
-/// where the path stops: `to_end`), if its blend keeps within `tol`.
-fn run_to(
-    cur: &Element,
-    rest: &mut [Waiting],
-    m: usize,
-    start: &PathPoint,
-    tol: f64,
-    vertices: &Vertices<'_>,
-    to_end: bool,
-) -> Option<Committed> {
-    let Segment::Line(line) = &rest.get(m)?.element.segment else {
-        return None;
-    };
-    let (end, upto) = if to_end {
-        let p = end_point(line, true, &vertices.around(m), SPLIT_MAX_ANGLE)?;
-        (p, line.length())
-    } else {
-        let p = split_point(line, &vertices.around(m), tol, SPLIT_MAX_ANGLE)?;
-        (p, 0.5 * line.length())
-    };
-    let mut contour = Vec::with_capacity(m + 2);
-    contour.push(ContourPart {
-        segment: &cur.segment,
-        from: cur.trim,
-        to: cur.segment.length(),
-    });
-    for w in &rest[..m] {
-        contour.push(ContourPart {
-            segment: &w.element.segment,
-            from: 0.0,
-            to: w.element.segment.length(),
-        });
-    }
-    contour.push(ContourPart {
-        segment: &rest[m].element.segment,
-        from: 0.0,
-        to: upto,
-    });
-    let (curve, _) = blend_within(start, &end, &contour, tol)?;
-    let feed = rest[..=m]
-        .iter()
-        .fold(cur.feed, |f, w| min_feed(f, w.element.feed));
-    let length = curve.length();
-    let mut out = Committed::default();
-    let last = &mut rest[m].element;
-    out.pieces.push(NewPiece {
-        shape: Shape::Blend(curve),
-        offset: 0.0,
-        length,
-        feed,
-        loc: last.loc,
-        headroom: Headroom::Ample,
-    });
-    if to_end {
-        out.consumed = m + 1;
-        out.stop_at_end = true;
-    } else {
-        last.trim = upto;
-        last.split = Some(end);
-        out.consumed = m;
-    }
-    Some(out)
 }
