@@ -401,3 +401,29 @@ fn a_hold_over_a_staircase_of_falling_jerk_limits_stops_smoothly() {
     let result = check_controlled(&d, &controls);
     assert!(result.is_ok(), "{result:?}");
 }
+
+/// A wavy R36.6 curve in 0.011 mm chords at F5140 whose feed override drops to 10 % near
+/// the end, while the jerk limit falls from 80 356 to 52 817 mm/s³ a little ahead. Braking
+/// for the new speed, the path may not brake any harder before that drop, but the only ramp
+/// that eased the deceleration aimed at the new speed, below where easing at once ends: it
+/// went on braking, and once the drop came within a period the speed went through zero (X
+/// at 8.8 times its jerk limit, the path turning back). The easing ramp now aims where it
+/// ends whenever the state is faster than the new speed.
+#[test]
+fn an_override_drop_before_a_lower_jerk_limit_eases_in_time() {
+    let d = Dense {
+        radius: 36.598493778897776,
+        wave: (0.1980753094338526, 4.1082297688769565),
+        chord: 0.011381281071706538,
+        chords: 2241,
+        round: 0.001,
+        corner_every: 0,
+        feed: 85.70737034469988,
+        limits: (168.41811954190925, 2322.287543842611, 100435.38171011482),
+        rise: 0.0,
+    };
+    let length = d.chord * d.chords as f64 / d.feed;
+    let controls = vec![(0.9718992358727077 * length, false, 0.0)];
+    let result = check_controlled(&d, &controls);
+    assert!(result.is_ok(), "{result:?}");
+}

@@ -604,13 +604,16 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     }
     if x.a < 0.0 {
         // Easing a deceleration at once with the window's jerk: the way to come to rest
-        // without reversing that the check assumes (see `rests_forwards`). Braking for a
-        // feed hold (a target of zero) also above the target: a state that may not brake
-        // any harder before a drop in jerk eases first. Otherwise the target is the
-        // current piece's speed limit, and nothing goes above it.
+        // without reversing that the check assumes (see `rests_forwards`). Above the target
+        // where the state is faster than it, braking for a feed hold (a target of zero) or
+        // for a lower feed override: a state that may not brake any harder before a drop
+        // in jerk eases first, and stays above the new target a little longer rather than
+        // turning back (the easing never speeds it up, and the speed limits of the pieces
+        // ahead are limits of the window). Below the target the target is the current
+        // piece's speed limit, and nothing goes above it.
         let eased = settled_speed(x, w.jerk);
         let eased = if target > 0.0 {
-            eased.min(target)
+            eased.min(target.max(x.v))
         } else {
             eased
         };
