@@ -427,3 +427,30 @@ fn an_override_drop_before_a_lower_jerk_limit_eases_in_time() {
     let result = check_controlled(&d, &controls);
     assert!(result.is_ok(), "{result:?}");
 }
+
+/// An R12.5 wave in 0.24 mm chords with two feed holds and then the override dropped to
+/// 10 %. A first version of the ramp that holds the current deceleration (see
+/// `speed::advance`) kept that deceleration as its limit even where the window's grip was
+/// lower, and X went 1 % over its acceleration limit; the ramp now takes the lower of the two.
+#[test]
+fn holding_a_deceleration_keeps_the_grip_of_the_window() {
+    let d = Dense {
+        radius: 12.49662037694364,
+        wave: (0.07345185296829783, 5.039303511842893),
+        chord: 0.24064692833734033,
+        chords: 995,
+        round: 0.001,
+        corner_every: 0,
+        feed: 122.63868978321351,
+        limits: (173.95718364355216, 518.5977435792572, 121105.94742161404),
+        rise: 0.0,
+    };
+    let length = d.chord * d.chords as f64 / d.feed;
+    let controls = vec![
+        (0.17443771039008266 * length, true, 0.65755574581524),
+        (0.15317164088912144 * length, true, 0.5751151868617747),
+        (0.7989956168560376 * length, false, 0.0),
+    ];
+    let result = check_controlled(&d, &controls);
+    assert!(result.is_ok(), "{result:?}");
+}

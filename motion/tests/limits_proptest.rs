@@ -472,17 +472,17 @@ fn a_rapid_comes_to_rest_on_its_end_point() {
     assert_controlled_run(&moves, &cfg, &[]);
 }
 
-/// Two programs the override/hold and random-move property tests found at 40 000 cases, both
-/// in the code before the corner-blend headroom change too. Each runs an arc at 53–79 mm/s
-/// into a tight helix at F300 (5 mm/s) on axes with one low jerk limit (2000 and 6624 mm/s³).
-/// The blend between them allows only 1.2–1.6 mm/s, and its speed-dependent grip is tiny near
-/// that speed (7–20 mm/s²). The path reaches the blend still braking, at 2.4–2.8 mm/s with
-/// 50–78 mm/s² of deceleration: it is already past saving 0.03 mm before the blend, although
-/// every state before it passed the check. X reaches 4.9 times its jerk limit in the first
-/// program and Z 1.18 times in the second. Not fixed yet: the check's braking need for a limit
-/// whose grip after it is far below the grip before it is the suspect.
+/// Two programs the override/hold and random-move property tests found at 40 000 cases. Each
+/// runs an arc at 53–79 mm/s into a tight helix at F300 (5 mm/s) on axes with one low jerk
+/// limit (2000 and 6624 mm/s³). The blend between them allows only 1.2–1.6 mm/s, and its
+/// grip is tiny near that speed (7–20 mm/s²), so the path must brake for it on a long, gentle
+/// curve. In the first, a drop in jerk from 98 410 to 1083 mm/s³ lay just ahead: braking
+/// harder with the full jerk could no longer be eased by the lower one, so no ramp passed the
+/// check and the fallback eased the deceleration at once, off the braking curve; the path
+/// reached the blend at 2.8 mm/s, braking at 52 mm/s² (X at 4.9 times its jerk limit; Z at
+/// 1.18 times in the second). Among the candidate ramps is now one that holds the current
+/// deceleration.
 #[test]
-#[ignore = "known defect: late braking into a blend with a tiny grip, see the comment"]
 fn braking_into_a_blend_with_a_tiny_grip_meets_its_limit() {
     let moves = [
         Move::Line {

@@ -603,6 +603,13 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
         c.0 = c.0.min(target);
     }
     if x.a < 0.0 {
+        // Holding the deceleration: towards the lowest target so far with the current
+        // deceleration as the limit (or the window's grip, where that is lower). Before a drop in jerk a ramp for a limit ahead with the
+        // full jerk may brake harder than the lower jerk can ease (it could not come to rest
+        // without reversing), while easing at once leaves the braking curve for that limit:
+        // the state on the curve between the two holds its deceleration.
+        let low = candidates.iter().map(|c| c.0).fold(target, f64::min);
+        candidates.push((low, (-x.a).min(w.grip.at(x.v)), w.jerk));
         // Easing a deceleration at once with the window's jerk: the way to come to rest
         // without reversing that the check assumes (see `rests_forwards`). Above the target
         // where the state is faster than it, braking for a feed hold (a target of zero) or
