@@ -422,10 +422,7 @@ fn an_override_drop_before_a_lower_jerk_limit_eases_in_time() {
         limits: (168.41811954190925, 2322.287543842611, 100435.38171011482),
         rise: 0.0,
     };
-    let length = d.chord * d.chords as f64 / d.feed;
-    let controls = vec![(0.9718992358727077 * length, false, 0.0)];
-    let result = check_controlled(&d, &controls);
-    assert!(result.is_ok(), "{result:?}");
+    assert_controlled_at_shares(&d, &[(0.9718992358727077, false, 0.0)]);
 }
 
 /// An R12.5 wave in 0.24 mm chords with two feed holds and then the override dropped to
@@ -445,12 +442,24 @@ fn holding_a_deceleration_keeps_the_grip_of_the_window() {
         limits: (173.95718364355216, 518.5977435792572, 121105.94742161404),
         rise: 0.0,
     };
+    assert_controlled_at_shares(
+        &d,
+        &[
+            (0.17443771039008266, true, 0.65755574581524),
+            (0.15317164088912144, true, 0.5751151868617747),
+            (0.7989956168560376, false, 0.0),
+        ],
+    );
+}
+
+/// Runs `d` with controls at shares of its time at the feed (as the property test draws
+/// them) and asserts what [`check_controlled`] checks.
+fn assert_controlled_at_shares(d: &Dense, shares: &[(f64, bool, f64)]) {
     let length = d.chord * d.chords as f64 / d.feed;
-    let controls = vec![
-        (0.17443771039008266 * length, true, 0.65755574581524),
-        (0.15317164088912144 * length, true, 0.5751151868617747),
-        (0.7989956168560376 * length, false, 0.0),
-    ];
-    let result = check_controlled(&d, &controls);
+    let controls = shares
+        .iter()
+        .map(|&(t, hold, x)| (t * length, hold, x))
+        .collect();
+    let result = check_controlled(d, &controls);
     assert!(result.is_ok(), "{result:?}");
 }
