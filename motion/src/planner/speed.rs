@@ -604,26 +604,22 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     }
     if x.a < 0.0 {
         // Holding the deceleration: towards the lowest target so far with the current
-        // deceleration as the limit (or the window's grip, where that is lower). Before a drop in jerk a ramp for a limit ahead with the
-        // full jerk may brake harder than the lower jerk can ease (it could not come to rest
-        // without reversing), while easing at once leaves the braking curve for that limit:
-        // the state on the curve between the two holds its deceleration.
+        // deceleration as the limit (or the window's grip, where that is lower). Before a
+        // drop in jerk a ramp for a limit ahead with the full jerk may brake harder than the
+        // lower jerk can ease (it could not come to rest without reversing), while easing
+        // at once leaves the braking curve for that limit: the state on the curve between
+        // the two holds its deceleration.
         let low = candidates.iter().map(|c| c.0).fold(target, f64::min);
         candidates.push((low, (-x.a).min(w.grip.at(x.v)), w.jerk));
         // Easing a deceleration at once with the window's jerk: the way to come to rest
-        // without reversing that the check assumes (see `rests_forwards`). Above the target
-        // where the state is faster than it, braking for a feed hold (a target of zero) or
-        // for a lower feed override: a state that may not brake any harder before a drop
-        // in jerk eases first, and stays above the new target a little longer rather than
-        // turning back (the easing never speeds it up, and the speed limits of the pieces
-        // ahead are limits of the window). Below the target the target is the current
-        // piece's speed limit, and nothing goes above it.
-        let eased = settled_speed(x, w.jerk);
-        let eased = if target > 0.0 {
-            eased.min(target.max(x.v))
-        } else {
-            eased
-        };
+        // without reversing that the check assumes (see `rests_forwards`). Easing ends below
+        // the current speed, so where the state is faster than the target (a feed hold's
+        // zero, a lower feed override) the ramp aims where easing ends: a state that may not
+        // brake any harder before a drop in jerk eases first and stays above the new target
+        // a little longer rather than turning back (the speed limits of the pieces ahead are
+        // limits of the window). Below the target, the current piece's speed limit, nothing
+        // goes above it.
+        let eased = settled_speed(x, w.jerk).min(target.max(x.v));
         candidates.push((eased, w.grip.at(x.v), w.jerk));
     }
     candidates.push((0.0, w.grip.at(peak_speed(x, w.jerk)), w.jerk));
