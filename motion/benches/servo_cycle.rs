@@ -1,7 +1,9 @@
 //! Cost of one servo cycle of the look-ahead planner, as a distribution: `next_step` timed
 //! one call at a time over a long dense program (0.05 mm chords of an R25 circle at
 //! F3000 with the planner fed as the runtime feeds it), printed as percentiles up to
-//! p99.99 and the maximum. divan then measures the mean and median of the same call.
+//! p99.99 and the maximum; and the same over laps of the benchmark square (50 × 50 mm,
+//! 1 mm corner arcs, F6000), where the path brakes into and speeds up out of blends four
+//! times a lap. divan then measures the mean and median of the dense program's call.
 //!
 //! On a shared machine single timings carry the machine's own interruptions (a fixed task
 //! of ~2 µs shows tails of tens of µs), so three distributions are printed: the single
@@ -9,7 +11,7 @@
 //! the least of three runs of that same cycle on copies of the planner (an interruption
 //! would have to hit all three: what is left is the planner's own cost).
 
-use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
+use klar_interp::{Feed, Op, OpKind, Plane, Pose, SourceLoc};
 use klar_motion::{Planner, PlannerConfig, Step};
 use std::f64::consts::PI;
 use std::time::Instant;
@@ -47,16 +49,47 @@ fn chord(k: usize) -> Op {
     }
 }
 
-/// Runs `cycles` servo cycles on the dense program and returns each `next_step` duration
-/// in nanoseconds (input pushed between cycles is not counted). With `repeats` > 1 each
-/// cycle is also run on that many copies of the planner first and the least time counts.
-fn cycle_times(cycles: usize, repeats: usize) -> Vec<u64> {
-    let mut planner = Planner::new(config(), point(0)).expect("valid config");
+/// The `k`-th move of endless laps of the benchmark square from (−24, 0): edges and 1 mm
+/// corner arcs turning left, at F6000.
+fn square_move(k: usize) -> Op {
+    let xy = |x: f64, y: f64| Pose::xyz(x, y, 0.0);
+    let feed = Feed::Rate(100.0);
+    let corner = |from: Pose, to: Pose, center: [f64; 2]| OpKind::Arc {
+        from,
+        to,
+        center,
+        plane: Plane::XY,
+        sweep: 90.0,
+        feed,
+    };
+    let edge = |from: Pose, to: Pose| OpKind::Line { from, to, feed };
+    let kind = match k % 8 {
+        0 => edge(xy(-24.0, 0.0), xy(24.0, 0.0)),
+        1 => corner(xy(24.0, 0.0), xy(25.0, 1.0), [24.0, 1.0]),
+        2 => edge(xy(25.0, 1.0), xy(25.0, 49.0)),
+        3 => corner(xy(25.0, 49.0), xy(24.0, 50.0), [24.0, 49.0]),
+        4 => edge(xy(24.0, 50.0), xy(-24.0, 50.0)),
+        5 => corner(xy(-24.0, 50.0), xy(-25.0, 49.0), [-24.0, 49.0]),
+        6 => edge(xy(-25.0, 49.0), xy(-25.0, 1.0)),
+        _ => corner(xy(-25.0, 1.0), xy(-24.0, 0.0), [-24.0, 1.0]),
+    };
+    Op {
+        kind,
+        loc: SourceLoc::default(),
+    }
+}
+
+/// Runs `cycles` servo cycles on the endless program `source` (its moves by index, from
+/// `start`) and returns each `next_step` duration in nanoseconds (input pushed between
+/// cycles is not counted). With `repeats` > 1 each cycle is also run on that many copies
+/// of the planner first and the least time counts.
+fn cycle_times(cycles: usize, repeats: usize, start: Pose, source: fn(usize) -> Op) -> Vec<u64> {
+    let mut planner = Planner::new(config(), start).expect("valid config");
     let mut next = 0usize;
     let mut times = Vec::with_capacity(cycles);
     while times.len() < cycles {
         while planner.needs_input() {
-            planner.push(chord(next)).expect("valid op");
+            planner.push(source(next)).expect("valid op");
             next += 1;
         }
         let mut least = u64::MAX;
@@ -97,12 +130,24 @@ fn noise_times(count: usize) -> Vec<u64> {
 }
 
 /// Prints p50, p99, p99.9, p99.99 and the maximum of 200 000 cycles (200 s of motion):
-/// single timings, the machine's noise, and the least of three runs per cycle.
+/// single timings, the machine's noise, and the least of three runs per cycle, on the
+/// dense program and on the square's laps.
 fn print_percentiles() {
     let cycles = 200_000;
-    print_row("servo cycle, single timings", cycle_times(cycles, 1));
+    print_row(
+        "servo cycle, single timings",
+        cycle_times(cycles, 1, point(0), chord),
+    );
     print_row("fixed task (machine noise)", noise_times(cycles));
-    print_row("servo cycle, least of 3 runs", cycle_times(cycles, 3));
+    print_row(
+        "servo cycle, least of 3 runs",
+        cycle_times(cycles, 3, point(0), chord),
+    );
+    let corner = Pose::xyz(-24.0, 0.0, 0.0);
+    print_row(
+        "square laps, least of 3 runs",
+        cycle_times(cycles, 3, corner, square_move),
+    );
 }
 
 fn print_row(what: &str, mut t: Vec<u64>) {

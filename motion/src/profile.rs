@@ -250,6 +250,36 @@ impl Ramp {
         0.0
     }
 
+    /// Speed once the ramp has covered `distance` (the target speed beyond its end), for a
+    /// ramp whose speed stays positive until then. Within the phase where the distance is
+    /// reached the time is found by bisection: the distance grows with time while the
+    /// speed is positive.
+    pub fn speed_after(&self, distance: f64) -> f64 {
+        let (mut s, mut v, mut a) = (0.0, self.v0, self.a0);
+        for &(j, d) in &self.phases {
+            if d <= 0.0 {
+                continue;
+            }
+            let at = |h: f64| s + v * h + 0.5 * a * h * h + j * h * h * h / 6.0;
+            if at(d) >= distance {
+                let (mut lo, mut hi) = (0.0, d);
+                for _ in 0..SPEED_AFTER_STEPS {
+                    let mid = 0.5 * (lo + hi);
+                    if at(mid) < distance {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                return v + a * hi + 0.5 * j * hi * hi;
+            }
+            s = at(d);
+            v += a * d + 0.5 * j * d * d;
+            a += j * d;
+        }
+        self.target
+    }
+
     /// State `t ≥ 0` seconds after the start; cruise at the target after the ramp.
     pub fn state(&self, t: f64) -> RampState {
         let (mut s, mut v, mut a) = (0.0, self.v0, self.a0);
@@ -273,6 +303,10 @@ impl Ramp {
         RampState { s, v, a }
     }
 }
+
+/// Bisection steps in [`Ramp::speed_after`]: a phase lasts at most a few tenths of a second
+/// at the speeds and limits of a machine, so 2⁻³⁰ of it is far below a nanosecond.
+const SPEED_AFTER_STEPS: usize = 30;
 
 /// Phases raising the speed by `dv` from acceleration `a0`, where `dv ≥ a0·|a0|/(2J)`.
 fn speed_up(dv: f64, a0: f64, accel: f64, jerk: f64) -> [(f64, f64); 3] {
@@ -301,5 +335,30 @@ fn speed_up(dv: f64, a0: f64, accel: f64, jerk: f64) -> [(f64, f64); 3] {
             (0.0, hold),
             (-jerk, accel / jerk),
         ]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_speed_after_a_distance_is_the_speed_of_the_state_that_reaches_it() {
+        // Braking from 40 mm/s at −300 mm/s² to 10 mm/s (A 800, J 2e4), a ramp with all
+        // three phases, and speeding up from rest; checked against the state by time.
+        for r in [
+            Ramp::new(40.0, -300.0, 10.0, 800.0, 2e4),
+            Ramp::new(0.0, 0.0, 50.0, 1000.0, 1e5),
+        ] {
+            let total = r.duration();
+            for k in 1..40 {
+                let t = total * f64::from(k) / 40.0;
+                let x = r.state(t);
+                let v = r.speed_after(x.s);
+                assert!((v - x.v).abs() < 1e-6, "{t}: {v} against {}", x.v);
+            }
+            // Beyond the end: the target.
+            assert_eq!(r.speed_after(r.distance() + 1.0), r.target());
+        }
     }
 }

@@ -301,6 +301,34 @@ fn programs_that_once_went_over_a_limit_stay_within_them() {
             limits: (174.3009624168831, 736.787290489304, 66496.85960544352),
             rise: 0.0,
         },
+        // An R59.8 wave rising 5 mm in 0.005 mm chords rounded to 1 µm with a 90° corner
+        // every 328 chords, and an R56.5 circle falling 1.5 mm in 0.011 mm chords rounded to
+        // 0.1 µm with one every 55: braking through the limits before a corner stop towards
+        // the stop itself, the path rode the stop's exact braking curve from far away, came
+        // 0.08 µm late and was clamped onto it (Y at 1.35 and Z at 1.7 times their jerk
+        // limit in the first, X at 1.13 times in the second).
+        Dense {
+            radius: 59.8352538744643,
+            wave: (0.282689831557529, 1.0),
+            chord: 0.005,
+            chords: 1298,
+            round: 1e-6,
+            corner_every: 328,
+            feed: 33.00504868683263,
+            limits: (289.0502449671166, 1778.7752998269586, 110204.7844104287),
+            rise: 4.974922652860331,
+        },
+        Dense {
+            radius: 56.53982469982262,
+            wave: (0.0, 1.0),
+            chord: 0.010642020812181598,
+            chords: 298,
+            round: 0.0001,
+            corner_every: 55,
+            feed: 114.86939337916027,
+            limits: (164.85082992795742, 2366.1739316392864, 66255.69628637403),
+            rise: -1.4570029130362996,
+        },
     ];
     for d in &cases {
         if let Err(e) = check_dense(d) {

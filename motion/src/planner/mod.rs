@@ -32,6 +32,7 @@ mod scan;
 pub mod smooth;
 pub mod speed;
 pub mod tcpm;
+mod through;
 
 pub use tcpm::{TCPM_DERATE, TableGeometry};
 
@@ -603,13 +604,38 @@ impl Planner {
         }
     }
 
+    /// The speed the period's action heads for: the current piece's limit (zero in a feed
+    /// hold), or the next piece's where that is faster, the path does not stop in between
+    /// and the state may get there still speeding up: within the distance easing the
+    /// largest acceleration of the current piece covers, plus two periods' travel. The checks keep the speed within the current
+    /// piece's limit until its end (see `speed::leaves_below`).
+    fn go_target(&self) -> f64 {
+        let k = self.current_index();
+        let Some(p) = self.pieces.get(k).filter(|_| !self.held) else {
+            return 0.0;
+        };
+        let here = p.speed_limit(self.factor);
+        let Some(q) = self
+            .pieces
+            .get(k + 1)
+            .filter(|_| self.next_stop() > p.end())
+        else {
+            return here;
+        };
+        let (v, accel) = (self.state.v, p.grip.most());
+        let ease = accel / p.jerk;
+        let reach = (v + accel * ease) * ease + 2.0 * v * self.config.period;
+        if accel.is_finite() && p.end() - self.state.s <= reach {
+            here.max(q.speed_limit(self.factor))
+        } else {
+            here
+        }
+    }
+
     /// Moves the path state on by one period and samples it at time `t`.
     fn advance(&mut self, t: f64) -> Sample {
         self.scan();
-        let target = match (self.held, self.pieces.get(self.current_index())) {
-            (false, Some(p)) => p.speed_limit(self.factor),
-            _ => 0.0,
-        };
+        let target = self.go_target();
         let mut next = speed::advance(&self.state, target, &self.window, self.config.period);
         // Never past the end of the committed path or the next stop.
         let stop = self.next_stop();

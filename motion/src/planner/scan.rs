@@ -129,6 +129,7 @@ impl Planner {
                             && p.jerk >= last.jerk =>
                     {
                         last.speed = last.speed.min(limit);
+                        last.own = last.own.min(limit);
                         last.soft &= soft;
                         last.grip_after = low_grip;
                         last.jerk = last.jerk.min(p.jerk);
@@ -141,6 +142,7 @@ impl Planner {
                         w.limits.push(Limit {
                             at: p.start,
                             speed: limit,
+                            own: limit,
                             grip_after: low_grip,
                             grip: pre_grip,
                             jerk: pre_jerk.min(p.jerk),
@@ -171,6 +173,7 @@ impl Planner {
             w.limits.push(Limit {
                 at: stop,
                 speed: 0.0,
+                own: 0.0,
                 grip_after: none,
                 grip: pre_grip,
                 jerk: pre_jerk,

@@ -28,6 +28,13 @@
 //!    only by braking for one further on): of these ramps the one that leaves the lowest
 //!    speed without turning the path back.
 //!
+//! A limit is met with zero acceleration unless the path passes it on the way to another:
+//! braking through it towards a lower limit behind it (see `passes_under`: the parts of a
+//! blend into a corner, whose limits step down piece by piece), or leaving the current
+//! piece for a faster one while still speeding up (see `leaves_below`: out of a corner).
+//! Then the state must cross the limit no faster than the limit's own speed and within
+//! the acceleration limit after it, and the limits behind it are judged on their own.
+//!
 //! Each action has |jerk| ≤ J and |a| ≤ A, the window's smallest path limits, so the
 //! per-axis limits of every piece in the window hold. Positions are integrated exactly for
 //! piecewise constant jerk, so finite differences of the samples stay within the limits too.
@@ -39,6 +46,7 @@
 //! most speed after the period. Braking, the checks let the ramp switch to the higher
 //! acceleration of lower speeds at fixed knees of the grip ([`brake_distance`]).
 
+use super::through::{CROSSING_SLACK, leaves_below, passes_under};
 use crate::limits::Grip;
 use crate::profile::Ramp;
 
@@ -58,8 +66,12 @@ pub struct Motion {
 pub struct Limit {
     /// Where they start.
     pub at: f64,
-    /// The speed limit from there on (0 for a stop).
+    /// The speed limit from there on (0 for a stop), lowered by [`settle`] until the
+    /// limits after it can be met from it.
     pub speed: f64,
+    /// The speed limit of the pieces from there on as they allow it (before [`settle`]):
+    /// what a state braking through the limit towards a lower one must not exceed.
+    pub own: f64,
     /// The acceleration limit by speed from there on.
     pub grip_after: Grip,
     /// The smallest acceleration limit by speed between the current position and `at`.
@@ -102,19 +114,19 @@ impl Default for Window {
 /// The actions brake with the full limits, so a state judged safe always has an action
 /// whose result is judged safe again, with room for rounding and for limits that follow
 /// each other closer than one period travels (dense CAM code).
-const JUDGE: f64 = 0.98;
+pub(super) const JUDGE: f64 = 0.98;
 
 /// Bisection steps for the constant-jerk action.
 const BISECTION_STEPS: usize = 20;
 
 /// Slack for rounding: relative, when comparing an acceleration with a limit; absolute
 /// (mm/s), for the speed left when a deceleration is eased.
-const SPEED_SLACK: f64 = 1e-9;
+pub(super) const SPEED_SLACK: f64 = 1e-9;
 
 /// Relative slack above a speed limit that a state may have and still meet it (rounding),
 /// and the absolute slack above a stop's zero. The search for the highest safe ramp can land
 /// anywhere within it, so it is kept well below what a trace would notice.
-const LIMIT_SLACK: f64 = 1e-11;
+pub(super) const LIMIT_SLACK: f64 = 1e-11;
 
 /// Distance slack when comparing braking distances (rounding), mm.
 const DISTANCE_SLACK: f64 = 1e-12;
@@ -138,7 +150,7 @@ pub fn period_travel(v: f64, a: f64, jerk: f64, period: f64) -> f64 {
 
 /// The speed `x` settles at when its acceleration is brought to zero at once with jerk
 /// `jerk`: above its speed when it speeds up, below when it slows down.
-fn settled_speed(x: &Motion, jerk: f64) -> f64 {
+pub(super) fn settled_speed(x: &Motion, jerk: f64) -> f64 {
     x.v + x.a * x.a.abs() / (2.0 * jerk)
 }
 
@@ -179,7 +191,7 @@ pub fn brake_distance(x: &Motion, target: f64, grip: &Grip, jerk: f64) -> f64 {
 }
 
 /// Distance travelled while |a| is brought down to `limit` with jerk `jerk`.
-fn easing_distance(x: &Motion, limit: f64, jerk: f64) -> f64 {
+pub(super) fn easing_distance(x: &Motion, limit: f64, jerk: f64) -> f64 {
     let t = (x.a.abs() - limit).max(0.0) / jerk;
     let j = -x.a.signum() * jerk;
     (x.v * t + 0.5 * x.a * t * t + j * t * t * t / 6.0).max(0.0)
@@ -222,7 +234,7 @@ const EASING_STEPS: usize = 16;
 /// is positive. With a positive acceleration it is convex until the acceleration is zero, so
 /// Newton's method started there falls to the root without overshooting it; with a
 /// negative one it is concave, and Newton's method started at zero climbs to it.
-fn eased_by(x: &Motion, distance: f64, jerk: f64) -> Motion {
+pub(super) fn eased_by(x: &Motion, distance: f64, jerk: f64) -> Motion {
     let end = x.a.abs() / jerk;
     let j = -x.a.signum() * jerk;
     let at = |t: f64| x.v * t + 0.5 * x.a * t * t + j * t * t * t / 6.0;
@@ -409,10 +421,13 @@ pub fn braking_speed(target: f64, room: f64, accel: f64, jerk: f64) -> f64 {
 /// misses (it must slow down for it only because its acceleration could no longer be eased
 /// in time): the ramp for it speeds up towards its speed, and the limits behind it must
 /// be judged, and bind, on their own.
-fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (Limit, f64, f64)> + 'a {
+fn relevant<'a>(
+    x: &'a Motion,
+    w: &'a Window,
+) -> impl Iterator<Item = (usize, Limit, f64, f64)> + 'a {
     let mut covered = false;
     let (mut grip, mut jerk) = (Grip::constant(f64::INFINITY), f64::INFINITY);
-    w.limits.iter().filter_map(move |l| {
+    w.limits.iter().enumerate().filter_map(move |(k, l)| {
         if covered {
             return None;
         }
@@ -423,19 +438,71 @@ fn relevant<'a>(x: &'a Motion, w: &'a Window) -> impl Iterator<Item = (Limit, f6
             l.grip = grip;
             l.jerk = jerk;
         }
-        let (fast, hard) = misses(x, &l, w);
-        if l.at > x.s && !l.soft {
-            covered = slows_for(x, &l) && (x.v >= l.speed || fast == 0.0 && hard == 0.0);
+        let (mut fast, hard) = misses(x, &l, w);
+        // A limit missed with the zero-acceleration ramp may still be met on the way
+        // through: passed braking towards a lower one behind it, or, the current piece's,
+        // left still speeding up before the speed gets above it. Then it stands for nothing
+        // behind it: the limits after it are judged on their own.
+        let rest = w.limits.get(k + 1..).unwrap_or(&[]);
+        // A trial state one period on may have left the current piece for the next one:
+        // speeding up, it crossed the joint no faster than it is now.
+        let left = k == 0
+            && l.at <= x.s
+            && rest.first().is_some_and(|n| n.at <= x.s)
+            && x.a >= 0.0
+            && x.v <= l.own * (1.0 + CROSSING_SLACK);
+        let through = fast > 0.0
+            && (left
+                || l.at > x.s && !l.soft && passes_under(x, &l, rest).is_some()
+                || k == 0 && l.at <= x.s && leaves_below(x, &l, rest.first(), w));
+        if through {
+            fast = 0.0;
         }
-        Some((l, fast, hard))
+        // A limit ahead of the window's start that the state has crossed (a trial state one
+        // period on): braking through limits, the state must have crossed it no faster
+        // than its speed, whatever it settles at, and be within the acceleration limit
+        // after it.
+        if k > 0 && l.at <= x.s {
+            if x.v > l.own * (1.0 + CROSSING_SLACK) {
+                fast = fast.max(x.v / l.own.max(f64::MIN_POSITIVE));
+            }
+            let grip = l.grip_after.at(x.v);
+            if x.a.abs() > grip * (1.0 + CROSSING_SLACK) {
+                fast = fast.max(x.a.abs() / grip.max(f64::MIN_POSITIVE));
+            }
+        }
+        if l.at > x.s && !l.soft && !through {
+            // A state braking down to the limit's speed that gets there with its
+            // deceleration eased at once arrives as the backward pass assumes too.
+            let arrives =
+                x.a < 0.0 && x.v >= l.speed && easing_distance(x, 0.0, l.jerk) <= l.at - x.s;
+            covered = if slows_for(x, &l) {
+                x.v >= l.speed || fast == 0.0 && hard == 0.0
+            } else {
+                arrives
+            };
+        }
+        Some((k, l, fast, hard))
     })
 }
 
 /// True when `x` must slow down to meet limit `l` (or stop there: a stop is a point, not a
-/// region, so the distance to come to rest always counts).
+/// region, so the distance to come to rest always counts). A state that is braking settles
+/// below its speed only once its deceleration is eased: where the limit comes first, it
+/// must slow down for it unless easing at once gets there slow enough.
 fn slows_for(x: &Motion, l: &Limit) -> bool {
-    (l.speed <= 0.0 && x.v > 0.0)
+    if (l.speed <= 0.0 && x.v > 0.0)
         || settled_speed(x, l.jerk) > l.speed * (1.0 + LIMIT_SLACK) + LIMIT_SLACK
+    {
+        return true;
+    }
+    let room = l.at - x.s;
+    let above = |v: f64| v > l.own * (1.0 + CROSSING_SLACK);
+    x.a < 0.0
+        && room > 0.0
+        && above(x.v)
+        && easing_distance(x, 0.0, l.jerk) > room
+        && above(eased_by(x, room, l.jerk).v)
 }
 
 /// True when the state is safe: every limit in the window can still be met, and the speed
@@ -444,7 +511,7 @@ pub fn check(x: &Motion, w: &Window) -> bool {
     if !rests_forwards(x, w) {
         return false;
     }
-    relevant(x, w).all(|(_, fast, hard)| fast == 0.0 && hard == 0.0)
+    relevant(x, w).all(|(_, _, fast, hard)| fast == 0.0 && hard == 0.0)
 }
 
 /// A ramp towards a speed: (target, acceleration limit, jerk limit).
@@ -455,7 +522,7 @@ type Action = (f64, f64, f64);
 /// to distance left); empty when it misses none.
 fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
     let mut found: Vec<(Action, f64)> = Vec::new();
-    for (limit, too_fast, too_hard) in relevant(x, w) {
+    for (k, limit, too_fast, too_hard) in relevant(x, w) {
         let l = &limit;
         let urgency = if too_fast > 0.0 { too_fast } else { too_hard };
         if urgency <= 0.0 {
@@ -489,6 +556,17 @@ fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
             (l.speed.min(x.v), accel, w.jerk)
         };
         found.push((ramp, urgency));
+        // The ramp that brakes through the limit towards a lower one behind it, where the
+        // check lets `from` do so: next, should the ramp ending at this limit's speed cross
+        // it too fast.
+        if too_fast > 0.0 && l.at > from.s && !l.soft {
+            let rest = w.limits.get(k + 1..).unwrap_or(&[]);
+            if let Some((speed, grip, jerk)) = passes_under(from, l, rest) {
+                let jerk = jerk.min(w.jerk);
+                let accel = grip.min(w.grip).at(peak_speed(from, jerk));
+                found.push(((speed, accel, jerk), urgency));
+            }
+        }
     }
     found.sort_by(|a, b| b.1.total_cmp(&a.1));
     found.into_iter().map(|f| f.0).collect()
@@ -676,120 +754,5 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// A hard limit at `at` with speed `speed` and the same grip and jerk everywhere.
-    fn limit(at: f64, speed: f64) -> Limit {
-        let grip = Grip::constant(1000.0);
-        Limit {
-            at,
-            speed,
-            grip_after: grip,
-            grip,
-            jerk: 1e5,
-            soft: false,
-        }
-    }
-
-    #[test]
-    fn a_limit_passed_while_speeding_up_does_not_vouch_for_a_stop_behind_it() {
-        // A limit 0.5 mm ahead, settled against a stop 7 mm ahead, and a state still
-        // speeding up below the settled speed: it passes the limit with a positive
-        // acceleration, where the settled speed vouches for nothing.
-        let mut w = Window {
-            limits: vec![limit(0.5, 150.0), limit(7.0, 0.0)],
-            grip: Grip::constant(1000.0),
-            jerk: 1e5,
-            period: 1e-3,
-        };
-        settle(&mut w.limits);
-        let x = Motion {
-            s: 0.0,
-            v: 100.0,
-            a: 1000.0,
-        };
-        let first = w.limits[0];
-        assert!(first.speed < 150.0, "settled: {}", first.speed);
-        assert!(
-            !slows_for(&x, &first),
-            "the state need not slow down for it"
-        );
-        // No motion within the limits stops the state in time: the time-optimal stop from
-        // it (ease the acceleration, then brake) is longer than the way to the stop.
-        let stop = Ramp::new(x.v, x.a, 0.0, 1000.0, 1e5).distance();
-        assert!(stop > 7.0, "{stop}");
-        assert!(!check(&x, &w));
-        // The same state a little slower is safe.
-        let slower = Motion { v: 80.0, ..x };
-        assert!(Ramp::new(slower.v, slower.a, 0.0, 1000.0, 1e5).distance() < 6.5);
-        assert!(check(&slower, &w));
-    }
-
-    #[test]
-    fn the_braking_need_does_not_jump_where_the_easing_reaches_a_drop_in_jerk() {
-        // The current piece allows a jerk of 5000 mm/s³, the pieces from 3 mm on only 2000;
-        // a limit of 10 mm/s at 6 mm. A state speeding up eases its acceleration with the
-        // higher jerk as far as 3 mm, then with the lower one. Where braking ends must move
-        // with the state as it passes the place where its easing reaches 3 mm, not jump.
-        let grip = Grip::constant(1000.0);
-        let at = |at: f64, speed: f64, soft: bool| Limit {
-            at,
-            speed,
-            grip_after: grip,
-            grip,
-            jerk: 2000.0,
-            soft,
-        };
-        let w = Window {
-            limits: vec![at(3.0, 100.0, true), at(6.0, 10.0, false)],
-            grip,
-            jerk: 5000.0,
-            period: 1e-3,
-        };
-        let far = w.limits[1];
-        let ends = |s: f64| {
-            let x = Motion {
-                s,
-                v: 20.0,
-                a: 200.0,
-            };
-            s + brake_need(&x, &far, &w, JUDGE)
-        };
-        let (mut crossed, mut prev) = (false, ends(1.0));
-        for k in 1..=1500 {
-            let s = 1.0 + 1e-3 * k as f64;
-            let x = Motion {
-                s,
-                v: 20.0,
-                a: 200.0,
-            };
-            crossed |= s + easing_distance(&x, 0.0, JUDGE * 5000.0) > 3.0;
-            let now = ends(s);
-            assert!(
-                (now - prev).abs() < 5e-3,
-                "braking ends at {prev} mm, then at {now} mm from {s} mm"
-            );
-            prev = now;
-        }
-        assert!(crossed, "the easing never reached the drop in jerk");
-    }
-
-    #[test]
-    fn braking_speed_is_where_the_ramp_fills_the_room() {
-        // Both cases of the S-curve (peak acceleration reached or not), against the ramp's
-        // own integrated distance.
-        for &(w, room, a, j) in &[
-            (0.0, 5.0, 1000.0, 1e5),
-            (20.0, 0.3, 1000.0, 1e5),
-            (47.0, 0.01, 900.0, 1e9),
-            (3.0, 1e-4, 500.0, 2000.0),
-            (100.0, 50.0, 2000.0, 5e4),
-        ] {
-            let v = braking_speed(w, room, a, j);
-            assert!(v >= w);
-            let d = Ramp::new(v, 0.0, w, a, j).distance();
-            assert!((d - room).abs() <= 1e-9 * room.max(1.0), "{w} {room}: {d}");
-        }
-    }
-}
+#[path = "speed_tests.rs"]
+mod tests;
