@@ -508,6 +508,50 @@ fn bad_ops_are_refused_with_their_location() {
 }
 
 #[test]
+fn tight_corners_ahead_do_not_pull_the_program_into_the_look_ahead() {
+    // Laps of a 50 × 50 mm square with 1 mm corner arcs at F6000: at the full speed of its
+    // edges the blends of its corners allow no acceleration at all (the curvature would take
+    // it all), which once made the look-ahead reach infinite: the planner asked for the
+    // whole program (2500 moves, 20 000 pieces) and each servo cycle scanned all of it.
+    let mut p = Planner::new(
+        config(limits_xyz(100.0, 1000.0, 1e5)),
+        Pose::xyz(-24.0, 0.0, 0.0),
+    )
+    .expect("valid config");
+    let xy = |x: f64, y: f64| Pose::xyz(x, y, 0.0);
+    let feed = Feed::Rate(100.0);
+    let lap = [
+        (xy(-24.0, 0.0), xy(24.0, 0.0), None),
+        (xy(24.0, 0.0), xy(25.0, 1.0), Some([24.0, 1.0])),
+        (xy(25.0, 1.0), xy(25.0, 49.0), None),
+        (xy(25.0, 49.0), xy(24.0, 50.0), Some([24.0, 49.0])),
+        (xy(24.0, 50.0), xy(-24.0, 50.0), None),
+        (xy(-24.0, 50.0), xy(-25.0, 49.0), Some([-24.0, 49.0])),
+        (xy(-25.0, 49.0), xy(-25.0, 1.0), None),
+        (xy(-25.0, 1.0), xy(-24.0, 0.0), Some([-24.0, 1.0])),
+    ];
+    let mut pushed = 0usize;
+    let mut most_ahead = 0usize;
+    for cycle in 0..6000 {
+        while p.needs_input() && pushed < 10_000 {
+            let (from, to, center) = lap[pushed % lap.len()];
+            let n = u32::try_from(pushed + 1).expect("few moves");
+            let op = match center {
+                Some(c) => arc(n, from, to, c, Plane::XY, 90.0, feed),
+                None => line(n, from, to, feed),
+            };
+            p.push(op).expect("valid move");
+            pushed += 1;
+        }
+        // Moves pushed beyond those the path has got through: about 2.4 s a lap.
+        let done = (cycle as f64 / 2400.0 * lap.len() as f64) as usize;
+        most_ahead = most_ahead.max(pushed.saturating_sub(done));
+        assert!(p.next_step().is_some());
+    }
+    assert!(most_ahead <= 2 * lap.len(), "{most_ahead} moves ahead");
+}
+
+#[test]
 fn the_look_ahead_is_sized_by_braking_distance_and_bounded_in_memory() {
     // 1 mm segments: the planner asks for input until the committed path reaches past its
     // look-ahead distance (three elements wait for their corners).

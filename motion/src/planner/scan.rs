@@ -45,7 +45,11 @@ impl Planner {
         };
         let vh = self.state.v.max(current);
         let (v0, a0, period) = (vh, self.state.a.max(0.0), self.config.period);
-        // Braking distance with the lowest limits seen so far, doubled.
+        // Braking distance with the lowest limits seen so far, doubled. A piece's grip is
+        // taken at the lower of the speed it allows and the state's: on a tight curve the
+        // grip at the state's speed may be none at all (the curvature would take all of
+        // the acceleration), but the path is never on it that fast, and an infinite reach
+        // would pull the whole program into the window.
         let from = Motion {
             s: 0.0,
             v: v0,
@@ -75,20 +79,26 @@ impl Planner {
             self.pieces.get(first).map_or(0.0, |p| p.jerk),
             period,
         );
+        let (mut reach_accel, mut reach_jerk) = (f64::INFINITY, f64::INFINITY);
         for (k, p) in self.pieces.iter().skip(first).enumerate() {
             if p.start - s > range || p.start >= stop {
                 break;
+            }
+            let limit = p.speed_limit(self.factor);
+            let accel = p.grip.at(v0.min(limit));
+            if accel < reach_accel || p.jerk < reach_jerk {
+                reach_accel = reach_accel.min(accel);
+                reach_jerk = reach_jerk.min(p.jerk);
+                range = range.max(reach_for(&Grip::constant(reach_accel), reach_jerk));
             }
             if k == 0 {
                 w.grip = p.grip;
                 w.jerk = p.jerk;
                 pre_grip = p.grip;
                 pre_jerk = p.jerk;
-                range = range.max(reach_for(&pre_grip, pre_jerk));
             } else if p.start <= next_reach {
                 w.jerk = w.jerk.min(p.jerk);
             }
-            let limit = p.speed_limit(self.factor);
             // A jerk below all before it in the window is a limit too: the state must
             // reach that piece able to go on with its jerk (a piece committed while the
             // path state moved on the piece before keeps its own, higher jerk, see
@@ -157,7 +167,6 @@ impl Planner {
             if pre_grip.undercut_by(&p.grip) || p.jerk < pre_jerk {
                 pre_grip = pre_grip.min(p.grip);
                 pre_jerk = pre_jerk.min(p.jerk);
-                range = range.max(reach_for(&pre_grip, pre_jerk));
             }
         }
         self.range = range;

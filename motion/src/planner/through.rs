@@ -64,9 +64,10 @@ pub(super) fn passes_under(x: &Motion, l: &Limit, rest: &[Limit]) -> Option<(f64
             continue;
         }
         let ramp = Ramp::new(x.v, x.a, m.speed, accel, judged);
-        if ramp.distance() <= m.at - x.s
-            && ramp.speed_after(l.at - x.s) <= l.own * (1.0 + LIMIT_SLACK)
-        {
+        // The ramp's speed only falls: already within `l`'s speed, it passes below it.
+        let below =
+            |r: &Ramp| x.v <= l.own || r.speed_after(l.at - x.s) <= l.own * (1.0 + LIMIT_SLACK);
+        if ramp.distance() <= m.at - x.s && below(&ramp) {
             return Some((m.speed, grip, jerk));
         }
     }
