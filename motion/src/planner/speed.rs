@@ -85,6 +85,24 @@ pub struct Limit {
     pub soft: bool,
 }
 
+#[cfg(test)]
+impl Limit {
+    /// A limit at `at` with speed `speed` (its own too), acceleration `accel` at every
+    /// speed and jerk `jerk` on the way to it and after it.
+    pub(super) fn uniform(at: f64, speed: f64, accel: f64, jerk: f64, soft: bool) -> Limit {
+        let grip = Grip::constant(accel);
+        Limit {
+            at,
+            speed,
+            own: speed,
+            grip_after: grip,
+            grip,
+            jerk,
+            soft,
+        }
+    }
+}
+
 /// What the generator needs to know about the path ahead.
 #[derive(Debug, Clone)]
 pub struct Window {

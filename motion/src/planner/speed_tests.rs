@@ -4,15 +4,16 @@ use super::*;
 
 /// A hard limit at `at` with speed `speed` and the same grip and jerk everywhere.
 fn limit(at: f64, speed: f64) -> Limit {
-    let grip = Grip::constant(1000.0);
-    Limit {
-        at,
-        speed,
-        own: speed,
-        grip_after: grip,
-        grip,
+    Limit::uniform(at, speed, 1000.0, 1e5, false)
+}
+
+/// A window over `limits` for a period of 1 ms with 1000 mm/s² and 1e5 mm/s³.
+fn window(limits: Vec<Limit>) -> Window {
+    Window {
+        limits,
+        grip: Grip::constant(1000.0),
         jerk: 1e5,
-        soft: false,
+        period: 1e-3,
     }
 }
 
@@ -21,12 +22,7 @@ fn a_limit_passed_while_speeding_up_does_not_vouch_for_a_stop_behind_it() {
     // A limit 0.5 mm ahead, settled against a stop 7 mm ahead, and a state still
     // speeding up below the settled speed: it passes the limit with a positive
     // acceleration, where the settled speed vouches for nothing.
-    let mut w = Window {
-        limits: vec![limit(0.5, 150.0), limit(7.0, 0.0)],
-        grip: Grip::constant(1000.0),
-        jerk: 1e5,
-        period: 1e-3,
-    };
+    let mut w = window(vec![limit(0.5, 150.0), limit(7.0, 0.0)]);
     settle(&mut w.limits);
     let x = Motion {
         s: 0.0,
@@ -57,15 +53,7 @@ fn the_braking_need_does_not_jump_where_the_easing_reaches_a_drop_in_jerk() {
     // higher jerk as far as 3 mm, then with the lower one. Where braking ends must move
     // with the state as it passes the place where its easing reaches 3 mm, not jump.
     let grip = Grip::constant(1000.0);
-    let at = |at: f64, speed: f64, soft: bool| Limit {
-        at,
-        speed,
-        own: speed,
-        grip_after: grip,
-        grip,
-        jerk: 2000.0,
-        soft,
-    };
+    let at = |at: f64, speed: f64, soft: bool| Limit::uniform(at, speed, 1000.0, 2000.0, soft);
     let w = Window {
         limits: vec![at(3.0, 100.0, true), at(6.0, 10.0, false)],
         grip,
@@ -100,20 +88,6 @@ fn the_braking_need_does_not_jump_where_the_easing_reaches_a_drop_in_jerk() {
     assert!(crossed, "the easing never reached the drop in jerk");
 }
 
-/// A limit at `at` with speed `speed`, grip `accel` and jerk `jerk` on the way to it.
-fn step(at: f64, speed: f64, accel: f64, jerk: f64, soft: bool) -> Limit {
-    let grip = Grip::constant(accel);
-    Limit {
-        at,
-        speed,
-        own: speed,
-        grip_after: grip,
-        grip,
-        jerk,
-        soft,
-    }
-}
-
 /// States from `x` heading for `target` in the fixed window `w` while `go` holds.
 fn run(mut x: Motion, target: f64, w: &Window, go: impl Fn(&Motion) -> bool) -> Vec<Motion> {
     let mut out = vec![x];
@@ -132,19 +106,14 @@ fn braking_into_a_staircase_of_limits_goes_on_through_its_steps() {
     // ramp meeting each step with zero acceleration would have none. Every step is met
     // and the acceleration and jerk stay within the limits.
     let (a, j) = (600.0, 5e4);
-    let mut w = Window {
-        limits: vec![
-            step(0.0, 100.0, 1000.0, 1e5, true),
-            step(10.0, 40.0, 1000.0, 1e5, false),
-            step(10.3, 36.0, a, j, false),
-            step(10.6, 33.0, a, j, false),
-            step(10.9, 31.0, a, j, false),
-            step(30.0, 0.0, a, j, false),
-        ],
-        grip: Grip::constant(1000.0),
-        jerk: 1e5,
-        period: 1e-3,
-    };
+    let mut w = window(vec![
+        Limit::uniform(0.0, 100.0, 1000.0, 1e5, true),
+        Limit::uniform(10.0, 40.0, 1000.0, 1e5, false),
+        Limit::uniform(10.3, 36.0, a, j, false),
+        Limit::uniform(10.6, 33.0, a, j, false),
+        Limit::uniform(10.9, 31.0, a, j, false),
+        Limit::uniform(30.0, 0.0, a, j, false),
+    ]);
     settle(&mut w.limits);
     let start = Motion {
         s: 0.0,
@@ -184,16 +153,11 @@ fn leaving_a_slow_piece_for_a_faster_one_goes_on_speeding_up() {
     // speeding up at full acceleration, never faster than its limit on it: the last
     // state on it eases at once to the end within the limit, the first state past it
     // is no faster.
-    let w = Window {
-        limits: vec![
-            step(0.0, 30.0, 1000.0, 1e5, true),
-            step(0.3, 60.0, 1000.0, 1e5, false),
-            step(50.0, 0.0, 1000.0, 1e5, false),
-        ],
-        grip: Grip::constant(1000.0),
-        jerk: 1e5,
-        period: 1e-3,
-    };
+    let w = window(vec![
+        Limit::uniform(0.0, 30.0, 1000.0, 1e5, true),
+        Limit::uniform(0.3, 60.0, 1000.0, 1e5, false),
+        Limit::uniform(50.0, 0.0, 1000.0, 1e5, false),
+    ]);
     let start = Motion {
         s: 0.0,
         v: 22.0,

@@ -98,18 +98,9 @@ pub(super) fn leaves_below(x: &Motion, l: &Limit, next: Option<&Limit>, w: &Wind
 mod tests {
     use super::*;
 
-    /// A limit at `at` with speed `speed`, grip `accel` and jerk `jerk` on the way to it.
+    /// A hard limit at `at` with speed `speed`, grip `accel` and jerk `jerk`.
     fn limit(at: f64, speed: f64, accel: f64, jerk: f64) -> Limit {
-        let grip = Grip::constant(accel);
-        Limit {
-            at,
-            speed,
-            own: speed,
-            grip_after: grip,
-            grip,
-            jerk,
-            soft: false,
-        }
+        Limit::uniform(at, speed, accel, jerk, false)
     }
 
     #[test]
