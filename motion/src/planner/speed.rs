@@ -423,7 +423,8 @@ pub fn braking_speed(target: f64, room: f64, accel: f64, jerk: f64) -> f64 {
     w + u.max(0.0) * u.max(0.0)
 }
 
-/// The limits that bind state `x`, each with how far it misses them (see [`misses`]).
+/// The limits that bind state `x`, each with its index in the window and how far it
+/// misses them (see [`misses`]).
 ///
 /// Limits the state stands in are always checked. A limit ahead is judged with the lowest
 /// acceleration and jerk limits of all pieces between the state and it (its own cover only
@@ -435,7 +436,9 @@ pub fn braking_speed(target: f64, room: f64, accel: f64, jerk: f64) -> f64 {
 /// that curve meets them all: the checks would contradict the actions. A limit the state
 /// need not slow down for stands for nothing: [`settle`] vouches for the limits after it
 /// only from a state that reaches it without speeding up, and a state below its speed may
-/// still be speeding up when it gets there. Nor does one the state is still below but
+/// still be speeding up when it gets there (one braking down to it that eases its
+/// deceleration at once before it arrives as [`settle`] assumes, and stands for them). Nor
+/// does a limit met on the way through (see `through`), nor one the state is still below but
 /// misses (it must slow down for it only because its acceleration could no longer be eased
 /// in time): the ramp for it speeds up towards its speed, and the limits behind it must
 /// be judged, and bind, on their own.

@@ -23,19 +23,19 @@ const THROUGH_LIMITS: usize = 4;
 /// Braking through meets `l` when a braking ramp from `x` towards one of the next
 /// [`THROUGH_LIMITS`] hard limits `m` behind it in `rest` that is lower than `l`, with the
 /// lowest acceleration and jerk limits of all pieces up to `m` (shared by [`JUDGE`]), meets
-/// `m` and passes `l` no faster than `l`'s own speed (not the speed [`settle`](super::speed::settle) lowered it
-/// to for an arrival without acceleration). Where the speed limits step down piece after
-/// piece (the parts of a blend running into a corner), meeting each with zero acceleration
-/// makes the braking stop and start again at every step; braking through them follows the
-/// steps' lower corners instead.
+/// `m` and passes `l` no faster than `l`'s own speed (not the speed
+/// [`settle`](super::speed::settle) lowered it to for an arrival without acceleration).
+/// Where the speed limits step down piece after piece (the parts of a blend running into a
+/// corner), meeting each with zero acceleration makes the braking stop and start again at
+/// every step; braking through them follows the steps' lower corners instead.
 ///
 /// Only a plain braking ramp counts: one whose state is within those acceleration limits
 /// and never speeds up again (its speed falls all the way, so it is below `l`'s on all of
 /// `l`'s stretch once it is at its start). A state braking harder than the pieces ahead
 /// allow would ease with their low jerk and could dip far below `m`'s speed before coming
 /// back up: no way to meet `l`. Nor is a stop a target: stops are met exactly with the
-/// full limits (`speed::misses`), from the zero-acceleration ramps of the limits before them.
-/// The limits between `l` and `m` are judged on their own.
+/// full limits (`speed::misses`), from the zero-acceleration ramps of the limits before
+/// them. The limits between `l` and `m` are judged on their own.
 pub(super) fn passes_under(x: &Motion, l: &Limit, rest: &[Limit]) -> Option<(f64, Grip, f64)> {
     if x.a > 0.0 {
         return None;
@@ -86,12 +86,12 @@ pub(super) fn leaves_below(x: &Motion, l: &Limit, next: Option<&Limit>, w: &Wind
         return false;
     };
     let room = n.at - x.s;
-    if x.a <= 0.0 || n.speed <= l.speed || room <= 0.0 {
+    if x.a <= 0.0 || n.speed <= l.own || room <= 0.0 {
         return false;
     }
     let jerk = l.jerk.min(n.jerk).min(w.jerk) * JUDGE;
     easing_distance(x, 0.0, jerk) >= room
-        && eased_by(x, room, jerk).v <= l.speed * (1.0 + LIMIT_SLACK)
+        && eased_by(x, room, jerk).v <= l.own * (1.0 + LIMIT_SLACK)
 }
 
 #[cfg(test)]
