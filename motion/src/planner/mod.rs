@@ -3,7 +3,8 @@
 //! Motion ops become path elements ([`crate::geom::Segment`]); corners between elements
 //! are blended inside the active path tolerance ([`path`]); a jerk-limited speed generator
 //! moves along the blended path one servo period at a time ([`speed`]), looking ahead over
-//! the pieces within its braking distance (the window, in `scan.rs`). While TCPM is on,
+//! the pieces within its braking distance (the window, in `scan.rs`) and meeting their
+//! speed limits with zero acceleration or on the way through (`through.rs`). While TCPM is on,
 //! [`tcpm`] gives the program axes limits that keep the machine axes within theirs. There
 //! is no per-element profile: speed carries across elements, so short elements cost no time
 //! of their own.
