@@ -361,5 +361,14 @@ mod tests {
             // Beyond the end: the target.
             assert_eq!(r.speed_after(r.distance() + 1.0), r.target());
         }
+        // Braking from 40 mm/s already at the limit of 800 mm/s² holds it first: there the
+        // speed after d is √(40² − 2·800·d) (down to 10 mm/s plus the easing's 3.2 mm/s).
+        let r = Ramp::new(40.0, -800.0, 10.0, 800.0, 1e5);
+        for d in [0.05f64, 0.2, 0.4, 0.6] {
+            let want = (1600.0 - 1600.0 * d).sqrt();
+            assert!(want > 13.2, "{d}");
+            let v = r.speed_after(d);
+            assert!((v - want).abs() < 1e-5, "{d}: {v} against {want}");
+        }
     }
 }

@@ -606,27 +606,24 @@ impl Planner {
     }
 
     /// The speed the period's action heads for: the current piece's limit (zero in a feed
-    /// hold), or the next piece's where that is faster, the path does not stop in between
-    /// and the state may get there still speeding up: within the distance easing the
-    /// largest acceleration of the current piece covers, plus two periods' travel. The checks keep the speed within the current
-    /// piece's limit until its end (see `speed::leaves_below`).
+    /// hold), or the next piece's where that is faster, the state may get there still
+    /// speeding up (within the distance easing the largest acceleration of the current
+    /// piece covers, plus two periods' travel) and the path does not stop in between. The
+    /// checks keep the speed within the current piece's limit until its end (see
+    /// `through::leaves_below`).
     fn go_target(&self) -> f64 {
         let k = self.current_index();
         let Some(p) = self.pieces.get(k).filter(|_| !self.held) else {
             return 0.0;
         };
         let here = p.speed_limit(self.factor);
-        let Some(q) = self
-            .pieces
-            .get(k + 1)
-            .filter(|_| self.next_stop() > p.end())
-        else {
+        let Some(q) = self.pieces.get(k + 1) else {
             return here;
         };
         let (v, accel) = (self.state.v, p.grip.most());
         let ease = accel / p.jerk;
         let reach = (v + accel * ease) * ease + 2.0 * v * self.config.period;
-        if accel.is_finite() && p.end() - self.state.s <= reach {
+        if accel.is_finite() && p.end() - self.state.s <= reach && self.next_stop() > p.end() {
             here.max(q.speed_limit(self.factor))
         } else {
             here

@@ -465,16 +465,8 @@ fn relevant<'a>(
         // left still speeding up before the speed gets above it. Then it stands for nothing
         // behind it: the limits after it are judged on their own.
         let rest = w.limits.get(k + 1..).unwrap_or(&[]);
-        // A trial state one period on may have left the current piece for the next one:
-        // speeding up, it crossed the joint no faster than it is now.
-        let left = k == 0
-            && l.at <= x.s
-            && rest.first().is_some_and(|n| n.at <= x.s)
-            && x.a >= 0.0
-            && x.v <= l.own * (1.0 + CROSSING_SLACK);
         let through = fast > 0.0
-            && (left
-                || l.at > x.s && !l.soft && passes_under(x, &l, rest).is_some()
+            && (l.at > x.s && !l.soft && passes_under(x, &l, rest).is_some()
                 || k == 0 && l.at <= x.s && leaves_below(x, &l, rest.first(), w));
         if through {
             fast = 0.0;

@@ -74,11 +74,13 @@ pub(super) fn passes_under(x: &Motion, l: &Limit, rest: &[Limit]) -> Option<(f64
     None
 }
 
-/// True when `x`, still speeding up on the piece of limit `l` (the current one), leaves it
-/// before its speed gets above `l`'s: easing the acceleration at once, with the lowest jerk
-/// of the period's action, the current piece and the next one (shared by [`JUDGE`]), the
-/// state is still speeding up at `next`, the start of a faster piece, and no faster than
-/// `l` there. Past `next` its limits judge the state. So the path can leave a slow piece
+/// True when `x`, speeding up on the piece of limit `l` (the current one), leaves it for
+/// the piece of `next` no faster than `l`'s own speed. A trial state one period on that is
+/// past `next`'s start already crossed the joint no faster than it is now, as long as it
+/// is still speeding up. A state before it must still be speeding up at `next`, a faster
+/// piece, and no faster than `l` there when it eases its acceleration at once, with the
+/// lowest jerk of the period's action, the current piece and the next one (shared by
+/// [`JUDGE`]). Past `next` its limits judge the state. So the path can leave a slow piece
 /// for a faster one (out of a corner) with the acceleration it has, instead of easing it
 /// to zero at the slow piece's speed first.
 pub(super) fn leaves_below(x: &Motion, l: &Limit, next: Option<&Limit>, w: &Window) -> bool {
@@ -86,7 +88,10 @@ pub(super) fn leaves_below(x: &Motion, l: &Limit, next: Option<&Limit>, w: &Wind
         return false;
     };
     let room = n.at - x.s;
-    if x.a <= 0.0 || n.speed <= l.own || room <= 0.0 {
+    if room <= 0.0 {
+        return x.a >= 0.0 && x.v <= l.own * (1.0 + CROSSING_SLACK);
+    }
+    if x.a <= 0.0 || n.speed <= l.own {
         return false;
     }
     let jerk = l.jerk.min(n.jerk).min(w.jerk) * JUDGE;
