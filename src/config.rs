@@ -11,7 +11,7 @@ use klar_drivers::stepdir::StepDirConfig;
 use klar_interp::op::{
     BUILT_IN_M_NUMBERS, MAX_MACHINE_FUNCTION, MachineFunctionDef, MachineFunctionTime,
 };
-use klar_interp::{AxisLetter, Diagnostic, Interpreter, Pose, Tool, ToolTable};
+use klar_interp::{AxisLetter, Diagnostic, Interpreter, Pose};
 use klar_motion::kinematics::{Cartesian, Kinematics, Lathe, TableTable, TiltAxis};
 use klar_motion::planner::TableGeometry;
 use klar_motion::{AxisLimits, MotionError, Planner, PlannerConfig};
@@ -19,6 +19,9 @@ use klar_sim::plant::SimAxisParams;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
+
+mod tables;
+pub use tables::ActivePreset;
 
 /// Linear or rotary.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize)]
@@ -280,6 +283,18 @@ pub struct MachineConfig {
     /// to the machine file; its tools join the `[[tool]]` entries.
     #[serde(default)]
     pub tool_table: Option<std::path::PathBuf>,
+    /// A HEIDENHAIN preset table (PRESET.PR: columns NR, X, Y, Z, A, B, C …), relative to the
+    /// machine file: cycle 247 activates its rows.
+    #[serde(default)]
+    pub preset_table: Option<std::path::PathBuf>,
+    /// The preset (row of `preset_table`) active when a program starts, as the operator
+    /// activated it on the machine; none: program coordinates are machine coordinates.
+    #[serde(default)]
+    pub active_preset: Option<i64>,
+    /// A HEIDENHAIN datum table (.D: columns NR, X, Y, Z …), relative to the machine file:
+    /// `CYCL DEF 7.1 #n` and ISO `G53` take their shifts from it.
+    #[serde(default)]
+    pub datum_table: Option<std::path::PathBuf>,
     /// The folder of the machine file (relative paths in it are resolved from here).
     #[serde(skip)]
     pub base_dir: Option<std::path::PathBuf>,
@@ -415,9 +430,9 @@ impl MachineConfig {
         })?;
         let mut config = Self::parse(&shown, &text)?;
         config.base_dir = path.parent().map(Path::to_path_buf);
-        // Read the tool table now, so that a bad file is refused with the machine file.
+        // Read the tables now, so that a bad file is refused with the machine file.
         config
-            .tool_table()
+            .check_tables()
             .map_err(|message| ConfigError::Invalid {
                 path: shown,
                 message,
@@ -480,37 +495,6 @@ impl MachineConfig {
         }
     }
 
-    /// The machine's tool table: the `tool_table` file, then the `[[tool]]` entries (which
-    /// win for the same number). `None` when the machine names no tools.
-    pub fn tool_table(&self) -> Result<Option<ToolTable>, String> {
-        let mut table = match &self.tool_table {
-            None => None,
-            Some(file) => {
-                let path = match &self.base_dir {
-                    Some(dir) => dir.join(file),
-                    None => file.clone(),
-                };
-                Some(ToolTable::load(&path).map_err(|e| format!("{}: {e}", path.display()))?)
-            }
-        };
-        if let Some(tools) = &self.tools {
-            let t = table.get_or_insert_with(ToolTable::new);
-            for tool in tools {
-                t.insert(Tool {
-                    number: tool.number,
-                    name: tool.name.clone().unwrap_or_default(),
-                    length: tool.length,
-                    radius: tool.radius,
-                    r2: 0.0,
-                    dl: 0.0,
-                    dr: 0.0,
-                    dr2: 0.0,
-                });
-            }
-        }
-        Ok(table)
-    }
-
     /// Opens a program for this machine: the interpreter told everything the machine file
     /// says that concerns the program (rotary axes for PLANE and cycle 19 / G80, the table
     /// geometry for PLANE … TURN, the machine builder's M functions, the tool table), whatever
@@ -521,6 +505,10 @@ impl MachineConfig {
         let mut interp = Interpreter::open(program, start)?
             .with_rotary_axes(&self.letters())
             .with_machine_functions(&self.machine_functions());
+        // M140 MB MAX retracts to the travel limits.
+        for a in self.axes.iter().filter(|a| a.kind == AxisKind::Linear) {
+            interp = interp.with_travel(a.letter, a.travel);
+        }
         // PLANE … TURN keeps the linear axes still: the tip's new place needs the pivots.
         if self.kinematics == KinematicsConfig::TableTable {
             // the tilt axis as in `kinematics`
@@ -532,11 +520,7 @@ impl MachineConfig {
             let t = &self.table_table;
             interp = interp.with_table_geometry(tilt, t.tilt_pivot, t.table_pivot);
         }
-        Ok(match self.tool_table() {
-            Ok(Some(table)) => interp.with_tools(table),
-            // A bad table file was refused when the machine file was loaded.
-            _ => interp,
-        })
+        Ok(self.with_tables(interp))
     }
 
     /// The start pose of this machine in program coordinates: each axis at its `start`.

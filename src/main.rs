@@ -35,14 +35,19 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Check a program without moving anything: prints `file:line:col: message` per error.
-    /// With `--machine`, the full test run against that machine (soft limits, feeds,
-    /// spindle, tools, planner), which `klar run` also does before it starts.
+    /// The full test run on the machine `klar run` would use (soft limits, feeds, spindle,
+    /// tools, planner), which `klar run` also does before it starts: the `--machine` file,
+    /// else the built-in machine for the program (lathe for `.nc`, mill otherwise).
     Check {
         /// The program file.
         program: PathBuf,
-        /// Machine description (TOML); the built-in mill when absent.
-        #[arg(long)]
+        /// Machine description (TOML); the built-in machine for the program when absent.
+        #[arg(long, conflicts_with = "program_only")]
         machine: Option<PathBuf>,
+        /// Check the program on its own, without any machine (syntax, parameters, geometry;
+        /// PLANE assumes an A/C table, any tool is known): `klar run` may still refuse it.
+        #[arg(long)]
+        program_only: bool,
     },
     /// Run a program on the machine (the built-in simulated mill by default).
     Run {
@@ -120,7 +125,11 @@ fn main() -> ExitCode {
     let cli = Cli::parse();
     let quiet = cli.quiet;
     match cli.command {
-        Command::Check { program, machine } => cmd_check(&program, machine.as_deref(), quiet),
+        Command::Check {
+            program,
+            machine,
+            program_only,
+        } => cmd_check(&program, machine.as_deref(), program_only, quiet),
         Command::Run {
             program,
             machine,
@@ -188,16 +197,15 @@ fn print_diagnostics(diags: &[Diagnostic]) {
     render::print(diags);
 }
 
-fn cmd_check(program: &Path, machine: Option<&Path>, quiet: bool) -> ExitCode {
+fn cmd_check(program: &Path, machine: Option<&Path>, program_only: bool, quiet: bool) -> ExitCode {
     let config = match load_machine_for(program, machine) {
         Ok(c) => c,
         Err(code) => return code,
     };
-    if machine.is_some() {
-        return cmd_test_run(program, &config);
+    if !program_only {
+        return cmd_test_run(program, &config, quiet);
     }
-    // the machine's own M functions are known M numbers
-    // no machine named: the program checked on its own
+    // the program checked on its own, on no machine
     let report = match klar::config::open_on(None, program, start_pose(&config)) {
         Ok(it) => it.check_report(),
         Err(d) => klar_interp::CheckReport {
@@ -307,7 +315,7 @@ fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCod
 }
 
 /// `klar check PROGRAM --machine FILE`: the test run.
-fn cmd_test_run(program: &Path, config: &MachineConfig) -> ExitCode {
+fn cmd_test_run(program: &Path, config: &MachineConfig, quiet: bool) -> ExitCode {
     let report = klar::testrun::test_run(program, config);
     print_diagnostics(&report.errors);
     for w in &report.warnings {
@@ -319,6 +327,9 @@ fn cmd_test_run(program: &Path, config: &MachineConfig) -> ExitCode {
     if !report.passed() {
         return ExitCode::FAILURE;
     }
+    if quiet {
+        return ExitCode::SUCCESS;
+    }
     say!(
         "{}: ok on {} ({} moves, {:.3} s planned)",
         program.display(),
@@ -328,6 +339,9 @@ fn cmd_test_run(program: &Path, config: &MachineConfig) -> ExitCode {
     );
     for (l, lo, hi) in &report.envelope {
         say!("  {l}: {lo:.4} .. {hi:.4}");
+    }
+    if let Ok(preset) = config.active_preset() {
+        say!("  preset at start: {preset}");
     }
     ExitCode::SUCCESS
 }

@@ -154,7 +154,7 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
         }
     }
     machine.finish(&mut report);
-    if config.tools.is_none() && machine.tool_calls > 0 {
+    if config.tools.is_none() && config.tool_table.is_none() && machine.tool_calls > 0 {
         report
             .undecided
             .push("the machine has no tool table: tool existence was not checked".into());
@@ -168,9 +168,13 @@ struct MachineChecks<'a> {
     config: &'a MachineConfig,
     letters: Vec<AxisLetter>,
     travel: Vec<[f64; 2]>,
+    /// Per axis: the out-of-travel position already reported, until the axis is back.
+    outside: Vec<Option<f64>>,
     positioning: Vec<Option<(f64, f64)>>,
     planner: Option<Planner>,
     tool_calls: u64,
+    /// The active tool and its radius (mm), until a zero-radius warning was given for it.
+    tool: Option<(u32, f64)>,
 }
 
 impl<'a> MachineChecks<'a> {
@@ -181,9 +185,11 @@ impl<'a> MachineChecks<'a> {
             config,
             letters: config.letters(),
             travel: config.axes.iter().map(|a| a.travel).collect(),
+            outside: vec![None; config.axes.len()],
             positioning: positioning_axes(config),
             planner,
             tool_calls: 0,
+            tool: None,
         }
     }
 
@@ -198,9 +204,7 @@ impl<'a> MachineChecks<'a> {
             report.motion_ops += 1;
             self.widen(&op, report);
         }
-        if let Err(d) = check_travel(&op, &self.letters, &self.travel, self.path) {
-            report.errors.push(d);
-        }
+        self.travel_once(&op, report);
         if let Err(d) = check_positioning(&op, &self.letters, &self.positioning, self.path) {
             report.errors.push(d);
         }
@@ -209,7 +213,25 @@ impl<'a> MachineChecks<'a> {
         }
         match &op.kind {
             OpKind::Spindle { dir, speed, .. } => self.spindle(op.loc, *dir, *speed, report),
-            OpKind::ToolChange { tool, .. } => {
+            OpKind::RadiusComp { side } if *side != klar_interp::CompSide::Off => {
+                if let Some((tool, radius)) = self.tool
+                    && tool != 0
+                    && radius == 0.0
+                {
+                    report.warnings.push(block_diagnostic(
+                        self.path,
+                        op.loc,
+                        format!(
+                            "radius compensation with tool {tool}, whose radius no tool table \
+                             or TOOL DEF gives: radius 0 is used"
+                        ),
+                    ));
+                    // said once per tool call
+                    self.tool = None;
+                }
+            }
+            OpKind::ToolChange { tool, radius, .. } => {
+                self.tool = Some((*tool, *radius));
                 self.tool_calls += 1;
                 // Tool 0 is the zero tool (length and radius 0) every TNC knows.
                 if let Some(tools) = &self.config.tools
@@ -226,6 +248,43 @@ impl<'a> MachineChecks<'a> {
             _ => {}
         }
         self.plan(op, report);
+    }
+
+    /// The travel check, once per excursion: an axis programmed outside its travel is
+    /// reported at the block that sends it there; blocks that merely start from that
+    /// position (their range reaches the reported point) are its consequences and stay
+    /// silent until the axis is back within its travel.
+    fn travel_once(&mut self, op: &Op, report: &mut TestRunReport) {
+        let Some((lo, hi)) = op_bounds(&op.kind) else {
+            return;
+        };
+        let mut said = Vec::new();
+        for (k, (&l, &[min, max])) in self.letters.iter().zip(&self.travel).enumerate() {
+            let (a, b) = (lo[l], hi[l]);
+            let Some(flag) = self.outside.get_mut(k) else {
+                continue;
+            };
+            if a >= min - TRAVEL_SLACK && b <= max + TRAVEL_SLACK {
+                *flag = None;
+                continue;
+            }
+            let v = if a < min - TRAVEL_SLACK { a } else { b };
+            let consequence =
+                flag.is_some_and(|at| a <= at + TRAVEL_SLACK && b >= at - TRAVEL_SLACK);
+            if consequence {
+                continue;
+            }
+            *flag = Some(v);
+            said.push(format!(
+                "axis {l} would move to {v:.4}, outside its travel [{min}, {max}]"
+            ));
+        }
+        if !said.is_empty() {
+            let message = said.join("; ");
+            report
+                .errors
+                .push(block_diagnostic(self.path, op.loc, message));
+        }
     }
 
     fn widen(&self, op: &Op, report: &mut TestRunReport) {
@@ -397,6 +456,16 @@ impl<'a> MachineChecks<'a> {
 
 /// A diagnostic for the block at `loc`, its message prefixed with the block number.
 pub(crate) fn block_diagnostic(path: &Path, loc: SourceLoc, message: String) -> Diagnostic {
+    // Planner errors name their block in words; the diagnostic's position says it already.
+    let mut said = format!("line {}, column {}", loc.line, loc.col);
+    if let Some(b) = loc.block {
+        said.push_str(&format!(" (block {b})"));
+    }
+    said.push_str(": ");
+    let message = match message.strip_prefix(&said) {
+        Some(rest) => rest.to_string(),
+        None => message,
+    };
     Diagnostic {
         file: path.to_path_buf(),
         line: loc.line,

@@ -250,3 +250,30 @@ fn single_block_holds_as_the_next_block_begins() {
     let end = wait("the end", &|s| s["state"] == "finished");
     assert_eq!(end["commanded"], serde_json::json!([50.0, 20.0, 100.0]));
 }
+
+#[test]
+fn the_machine_api_names_the_preset_programs_start_from() {
+    let dir = programs_dir("preset");
+    std::fs::write(
+        dir.join("PRESET.PR"),
+        "BEGIN PRESET.PR MM\nNR X Y Z\n0 +0 +0 +0\n4 +150 -25 +0\n[END]\n",
+    )
+    .unwrap();
+    let text = format!(
+        "preset_table = \"PRESET.PR\"\nactive_preset = 4\n{}",
+        klar::config::BUILTIN_MILL
+    );
+    std::fs::write(dir.join("machine.toml"), text).unwrap();
+    let machine = MachineConfig::load(&dir.join("machine.toml")).expect("machine loads");
+    let (_rt, addr) = start(ServeOptions {
+        machine,
+        ..options(&dir, None)
+    });
+    let (code, body) = request(addr, "GET", "/api/machine", "", "");
+    assert_eq!(code, 200, "{body}");
+    assert_eq!(json(&body)["preset"], "4 X+150 Y-25");
+    // the built-in mill has none
+    let (_rt2, addr2) = start(options(&dir, None));
+    let (_, body) = request(addr2, "GET", "/api/machine", "", "");
+    assert_eq!(json(&body)["preset"], "none (machine datum)");
+}

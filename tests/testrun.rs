@@ -47,26 +47,24 @@ fn soft_limits_spindle_and_feed_are_found_with_block_and_axis() {
         .iter()
         .map(|d| (d.line, d.block, d.message.as_str()))
         .collect();
-    assert_eq!(found.len(), 4, "{found:#?}");
+    assert_eq!(found.len(), 3, "{found:#?}");
     // Block 2 turns the spindle on at the S of the TOOL CALL.
     assert_eq!((found[0].0, found[0].1), (3, Some(2)));
     assert!(found[0].2.contains("S20000") && found[0].2.contains("12000"));
-    // Block 3 ends at X+350; block 4 starts there.
-    for (k, line, block) in [(1, 4, 3), (2, 5, 4)] {
-        assert_eq!((found[k].0, found[k].1), (line, Some(block)));
-        assert!(
-            found[k].2.contains("axis X would move to 350.0000"),
-            "{}",
-            found[k].2
-        );
-    }
+    // Block 3 ends at X+350; block 4 starts there, which is the same excursion (one error).
+    assert_eq!((found[1].0, found[1].1), (4, Some(3)));
+    assert!(
+        found[1].2.contains("axis X would move to 350.0000"),
+        "{}",
+        found[1].2
+    );
     // Block 6: a half circle about (0, 100) of radius 250 from (250, 100) counter-clockwise
     // to (-250, 100) passes its top at Y = 100 + 250 = 350 although both ends are at Y 100.
-    assert_eq!((found[3].0, found[3].1), (7, Some(6)));
+    assert_eq!((found[2].0, found[2].1), (7, Some(6)));
     assert!(
-        found[3].2.contains("axis Y would move to 350.0000"),
+        found[2].2.contains("axis Y would move to 350.0000"),
         "{}",
-        found[3].2
+        found[2].2
     );
     // Block 7 at 20000 mm/min from (-250, 100) to (0, 0): X carries 250/√(250²+100²) of the
     // path, so X's 166 mm/s allow 166·√72500/250 mm/s = 10727 mm/min.
@@ -161,7 +159,7 @@ fn run_refuses_what_the_test_run_refuses_and_nothing_moves() {
     let path = temp_program("refused.h", MANY);
     let (result, trace) = run(&path, &MachineConfig::builtin_mill());
     match result.expect_err("refused").error {
-        RunError::Syntax(d) => assert_eq!(d.len(), 4, "{d:#?}"),
+        RunError::Syntax(d) => assert_eq!(d.len(), 3, "{d:#?}"),
         other => panic!("expected the test run's refusal, got {other}"),
     }
     assert!(trace.t.is_empty(), "{} trace rows", trace.t.len());

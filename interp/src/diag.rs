@@ -127,6 +127,17 @@ pub enum ProgramError {
     /// TOOL CALL of a tool missing from the tool table.
     #[error("tool {0} is not in the tool table")]
     UnknownTool(String),
+    /// A cycle needs the radius of a tool that no tool table and no TOOL DEF gives.
+    #[error(
+        "tool {tool} is not in the tool table: cycle {cycle} needs its radius (give it in the \
+         machine's tool table or with TOOL DEF)"
+    )]
+    UnknownToolRadius {
+        /// The tool as called (`7`, `"NAME"`).
+        tool: String,
+        /// The cycle that needs the radius.
+        cycle: u32,
+    },
     /// FN 14: the program stopped itself with an error number.
     #[error("FN 14: program stopped with error number {0}")]
     FnError(f64),
@@ -198,6 +209,18 @@ pub enum ProgramError {
         table: &'static str,
         /// The row asked for.
         row: f64,
+    },
+    /// A datum or preset row asked for on a machine without that table.
+    #[error(
+        "{table} {row} asked for, but the machine has no {table} table (`{key}` in the machine file)"
+    )]
+    NoTable {
+        /// `datum` or `preset`.
+        table: &'static str,
+        /// The row asked for.
+        row: f64,
+        /// The machine-file key that names the table.
+        key: &'static str,
     },
     /// An error inside a contour subprogram of an SL cycle.
     #[error("contour {label} (line {line}): {error}")]

@@ -363,9 +363,21 @@ impl Interpreter {
         self
     }
 
-    /// Sets the highest tool-axis position (mm), the target of `M140 MB MAX`.
-    pub fn with_retract_limit(mut self, limit: f64) -> Self {
-        self.target().retract_limit = Some(limit);
+    /// Makes row `nr` of the preset table (see [`Self::with_preset_table`]) active from the
+    /// program's start, as the operator's active preset on the machine; without such a row
+    /// nothing changes (a machine file naming a missing row is refused when it is loaded).
+    pub fn with_active_preset(mut self, nr: i64) -> Self {
+        self.target().activate_preset(nr);
+        self
+    }
+
+    /// Tells the interpreter the travel `[min, max]` (mm, machine coordinates) of the linear
+    /// machine axis `axis` (X, Y or Z; other letters are ignored): `M140 MB MAX` retracts along
+    /// the tool axis until the first linear axis reaches its travel limit.
+    pub fn with_travel(mut self, axis: crate::op::AxisLetter, travel: [f64; 2]) -> Self {
+        if let Some(slot) = self.target().travel.get_mut(axis.index()) {
+            *slot = Some(travel);
+        }
         self
     }
 
@@ -995,7 +1007,7 @@ impl Interpreter {
         self.set_dry_run(true);
         // A check keeps no coordinates: compensation in a tilted plane is allowed as in a run.
         self.set_working_plane_ops(true);
-        let errors = self.run_all(Mode::Check);
+        let errors = fold_repeats(self.run_all(Mode::Check));
         CheckReport {
             errors,
             missing: std::mem::take(&mut self.missing),
@@ -1004,10 +1016,68 @@ impl Interpreter {
     }
 }
 
+/// One error and its consequences are one diagnostic: a run of errors with the same message
+/// in the same file (every block after a missing feed, say) becomes the first of them, which
+/// names the lines of the others.
+fn fold_repeats(errors: Vec<Diagnostic>) -> Vec<Diagnostic> {
+    /// The message without its `block N: ` prefix.
+    fn without_block(m: &str) -> &str {
+        match m.strip_prefix("block ").and_then(|r| r.split_once(": ")) {
+            Some((n, rest)) if n.bytes().all(|b| b.is_ascii_digit()) => rest,
+            _ => m,
+        }
+    }
+    let mut out: Vec<(Diagnostic, Vec<u32>)> = Vec::with_capacity(errors.len());
+    for d in errors {
+        match out.last_mut() {
+            Some((first, more))
+                if without_block(&first.message) == without_block(&d.message)
+                    && first.file == d.file =>
+            {
+                more.push(d.line);
+            }
+            _ => out.push((d, Vec::new())),
+        }
+    }
+    out.into_iter()
+        .map(|(mut d, more)| {
+            match more.as_slice() {
+                [] => {}
+                [one] => d.message = format!("{} (also line {one})", d.message),
+                [first, .., last] if more.len() > 3 => {
+                    d.message = format!(
+                        "{} (also {} more lines, {first} to {last})",
+                        d.message,
+                        more.len()
+                    )
+                }
+                lines => {
+                    let list: Vec<String> = lines.iter().map(u32::to_string).collect();
+                    d.message = format!("{} (also lines {})", d.message, list.join(", "));
+                }
+            }
+            d
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use proptest::prelude::*;
+
+    #[test]
+    fn repeated_consequences_are_one_diagnostic() {
+        let text = "BEGIN PGM F MM\nL X+0 Y+0 Z+50 R0 FMAX\nL X+10\nL X+20\nL X+30\n\
+                    L Y+5 F100\nL X+10 Y+10 Z+10 Q\nEND PGM F MM\n";
+        let report = Interpreter::from_source("f.h", text, Pose::ZERO).check_report();
+        let lines: Vec<u32> = report.errors.iter().map(|d| d.line).collect();
+        assert_eq!(lines.first(), Some(&3), "{:?}", report.errors);
+        let first = &report.errors[0].message;
+        assert!(first.ends_with("(also lines 4, 5)"), "{first}");
+        // a different error later is still reported on its own
+        assert_eq!(lines.len(), 2, "{:?}", report.errors);
+    }
 
     fn run_bytes(bytes: Vec<u8>, mode: Mode) -> usize {
         let mut it = Interpreter::with_input(

@@ -200,7 +200,11 @@ fn diagnostics_name_the_block() {
     let e = first_error("BEGIN PGM T MM\nCYCL DEF 262 GEWINDEFRAESEN ~\n Q335=10\nEND PGM T MM\n");
     assert_eq!(e, "t.h:2:1: cycle 262 is not supported");
     let e = first_error("BEGIN PGM T MM\nCYCL DEF 7.0 N\nCYCL DEF 7.1 #4\nEND PGM T MM\n");
-    assert_eq!(e, "t.h:3:14: datum table has no row 4");
+    assert_eq!(
+        e,
+        "t.h:3:14: datum 4 asked for, but the machine has no datum table (`datum_table` in \
+         the machine file)"
+    );
     let e = first_error("BEGIN PGM T MM\nCYCL DEF 8.0 M\nCYCL DEF 8.1 X Z\nEND PGM T MM\n");
     assert_eq!(e, "t.h:3:16: the tool axis Z cannot be mirrored");
     let e = first_error(

@@ -97,12 +97,16 @@ fn m126_takes_the_short_way_and_m140_retracts() {
         OpKind::Line { feed, .. } => assert_eq!(*feed, Feed::Rapid),
         other => panic!("{other:?}"),
     }
-    // MB MAX needs the travel limit
+    // MB MAX needs the travel of the tool axis
     let (_, d) = run_until_error(&program("L Z+10 F100\nL M140 MB MAX"));
-    assert!(d.message.contains("travel limit"), "{}", d.message);
+    assert!(
+        d.message.contains("known travel of the tool axis Z"),
+        "{}",
+        d.message
+    );
     let ops: Vec<_> =
         Interpreter::from_source("t.h", &program("L Z+10 F100\nL M140 MB MAX"), Pose::ZERO)
-            .with_retract_limit(250.0)
+            .with_travel(AxisLetter::Z, [-100.0, 250.0])
             .map(Result::unwrap)
             .collect();
     match motions(&ops).last() {
@@ -117,4 +121,22 @@ fn m126_takes_the_short_way_and_m140_retracts() {
         .len(),
         2
     );
+}
+
+#[test]
+fn a_pocket_with_a_tool_nobody_defines_names_the_tool() {
+    let pocket = "TOOL CALL 7 Z S3000\nL Z+50 R0 FMAX\n\
+        CYCL DEF 251 RECTANGULAR POCKET ~\nQ215=0 ~\nQ218=40 ~\nQ219=30 ~\nQ220=2 ~\n\
+        Q368=0 ~\nQ224=0 ~\nQ367=0 ~\nQ207=500 ~\nQ351=+1 ~\nQ201=-5 ~\nQ202=5 ~\nQ369=0 ~\n\
+        Q206=150 ~\nQ338=0 ~\nQ200=2 ~\nQ203=+0 ~\nQ204=50 ~\nQ370=1 ~\nQ366=1 ~\nQ385=500\n\
+        L X+0 Y+0 FMAX M99";
+    let (_, d) = run_until_error(&program(pocket));
+    assert_eq!(
+        d.message,
+        "tool 7 is not in the tool table: cycle 251 needs its radius (give it in the \
+         machine's tool table or with TOOL DEF)"
+    );
+    // With TOOL DEF the same pocket runs.
+    let defined = format!("TOOL DEF 7 L+60 R+4\n{pocket}");
+    assert!(!motions(&run(&program(&defined))).is_empty());
 }

@@ -235,6 +235,8 @@ struct MachineInfo {
     letters: Vec<String>,
     travel: Vec<[f64; 2]>,
     servo_period: f64,
+    /// The preset programs start from (the machine file's `active_preset`), in words.
+    preset: String,
 }
 
 async fn machine(State(app): State<App>) -> Json<MachineInfo> {
@@ -244,6 +246,10 @@ async fn machine(State(app): State<App>) -> Json<MachineInfo> {
         letters: m.axes.iter().map(|a| a.letter.to_string()).collect(),
         travel: m.axes.iter().map(|a| a.travel).collect(),
         servo_period: m.servo_period,
+        preset: match m.active_preset() {
+            Ok(p) => p.to_string(),
+            Err(e) => e,
+        },
     })
 }
 

@@ -152,6 +152,14 @@ pub enum CycleError {
         /// The allowed range in words.
         range: &'static str,
     },
+    /// The active tool's radius does not fit the cycle (zero, negative, or too large).
+    #[error("cycle {cycle}: tool radius {radius} is not usable")]
+    ToolRadius {
+        /// Cycle number.
+        cycle: u32,
+        /// The radius of the active tool, mm.
+        radius: f64,
+    },
     /// The parameters are consistent on their own but describe impossible geometry (tool
     /// wider than the pocket, zero depth, …).
     #[error("cycle {cycle}: {msg}")]

@@ -115,7 +115,10 @@ pub(super) fn generate(
         _ => ctx.tool_radius,
     };
     if !(r.is_finite() && r > 0.0) {
-        return Err(c.geometry(format!("tool radius {r} is not usable")));
+        return Err(CycleError::ToolRadius {
+            cycle: c.cycle,
+            radius: r,
+        });
     }
     if depth == 0.0 {
         return Ok(());

@@ -122,6 +122,20 @@ fn cycle_err(e: CycleError) -> ExecError {
 }
 
 impl Machine {
+    /// A cycle's error as the program should hear it: a cycle that cannot use a zero tool
+    /// radius because the called tool is in no tool table says so.
+    pub(super) fn cycle_error(&self, e: CycleError) -> ProgramError {
+        match (&e, &self.tool_unknown) {
+            (CycleError::ToolRadius { cycle, radius }, Some(tool)) if *radius == 0.0 => {
+                ProgramError::UnknownToolRadius {
+                    tool: tool.clone(),
+                    cycle: *cycle,
+                }
+            }
+            _ => ProgramError::Cycle(e),
+        }
+    }
+
     /// Uses `table` for `CYCL DEF 7.1 #n`.
     pub fn set_datum_table(&mut self, table: DatumTable) {
         self.cyc.datums = Some(table);
@@ -130,6 +144,23 @@ impl Machine {
     /// Uses `table` for cycle 247.
     pub fn set_preset_table(&mut self, table: DatumTable) {
         self.cyc.presets = Some(table);
+    }
+
+    /// Makes row `nr` of the preset table the active preset at program start, as the preset
+    /// the operator activated on the machine: program coordinates count from it, and the
+    /// position the machine stands at is re-expressed in them. `false` (nothing changed)
+    /// when there is no such row.
+    pub fn activate_preset(&mut self, nr: i64) -> bool {
+        let Some(row) = self.cyc.presets.as_ref().and_then(|t| t.row(nr)).copied() else {
+            return false;
+        };
+        let machine = self.cyc.xf.map_point(&self.pos);
+        for (p, v) in self.cyc.xf.preset.iter_mut().zip(row.iter()) {
+            *p = v.unwrap_or(0.0);
+        }
+        self.pos = self.cyc.xf.unmap_point(&machine);
+        self.cyc.identity = self.cyc.xf.is_identity();
+        true
     }
 
     /// Maps an op leaving the queue to machine coordinates (unless it was mapped when the
@@ -382,9 +413,10 @@ impl Machine {
                 let Some(table) = &self.cyc.datums else {
                     return Err(at(
                         it.pos,
-                        ProgramError::NoDatumRow {
+                        ProgramError::NoTable {
                             table: "datum",
                             row: n,
+                            key: "datum_table",
                         },
                     ));
                 };
@@ -499,9 +531,10 @@ impl Machine {
                     }
                     None if n == 0.0 => {}
                     None => {
-                        return Err(here(ProgramError::NoDatumRow {
+                        return Err(here(ProgramError::NoTable {
                             table: "preset",
                             row: n,
+                            key: "preset_table",
                         }));
                     }
                 }
@@ -584,7 +617,7 @@ impl Machine {
             Some(pts) => cycles::generate_at_points(pts, def.number, &shifted, &ctx, &mut moves),
             None => (self.cyc.generator)(def.number, &shifted, &ctx, &mut moves),
         }
-        .map_err(cycle_err)?;
+        .map_err(|e| here(self.cycle_error(e)))?;
         self.emit_moves(&moves, emit);
         self.release();
         Ok(())

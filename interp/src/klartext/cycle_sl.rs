@@ -211,7 +211,7 @@ impl Machine {
         }
         let mut moves = Vec::new();
         cycles::generate_sl(def.number, &contours, &p20, &def, &ctx, &mut moves)
-            .map_err(ProgramError::Cycle)?;
+            .map_err(|e| self.cycle_error(e))?;
         let mark = out.len();
         let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
         self.emit_moves(&moves, &mut emit);

@@ -166,14 +166,17 @@ pub(crate) struct Machine {
     pub held_at: Option<usize>,
     /// RND or CHF waiting for the next contour element.
     pub(super) corner: Option<super::contour::Corner>,
+    /// The active tool as written (`7`, `"NAME"`) when no table and no TOOL DEF knows it:
+    /// its length and radius are taken as 0.
+    pub(super) tool_unknown: Option<String>,
     /// Table length and radius (with table deltas) of the active tool, mm.
     pub(super) tool_base: (f64, f64),
     /// M126: rotary axes take the shorter way.
     pub(super) shortest_rotary: bool,
     /// mm per program unit (public copy for the contour module).
     pub(super) unit: f64,
-    /// Highest position of the tool axis (M140 MB MAX), when known.
-    pub retract_limit: Option<f64>,
+    /// Travel of the linear machine axes X, Y, Z (M140 MB MAX), when known.
+    pub(crate) travel: super::retract::Travel,
     /// A program stop (STOP, M0, M1) has run: the operator may have moved the axes since.
     pub(crate) after_stop: bool,
     /// A position was read (FN 18 ID240/ID270) after a program stop: what is computed from
@@ -230,7 +233,8 @@ impl Machine {
             corner: None,
             shortest_rotary: false,
             tool_base: (0.0, 0.0),
-            retract_limit: None,
+            tool_unknown: None,
+            travel: [None; 3],
             after_stop: false,
             operator_value: false,
             unit: 1.0,

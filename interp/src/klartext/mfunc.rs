@@ -4,12 +4,13 @@
 //! M9 at block end, M0 (stop, spindle off, coolant off), M1 (optional stop) and M2/M30 (end,
 //! spindle off, coolant off) after the block's motion.
 //!
-//! Motion-related functions: M91 (coordinates of this block relative to the machine datum) and
-//! M92 (relative to the machine's fixed position) are accepted; the built-in machines have no
-//! presets or datum shifts, so both leave the coordinates as programmed. M126 makes absolute
+//! Motion-related functions: M91 (the coordinates of this `L` block are machine coordinates,
+//! from the machine datum: no preset or datum transform acts on them) and M92 (from the
+//! machine builder's fixed position, which klar's machines put at the machine datum; see
+//! `Machine::machine_datum_target`). M126 makes absolute
 //! rotary moves take the shorter way (less than 180°), M127 switches that off again. M140
-//! retracts along the tool axis after the block's motion: `MB d` by d (rapid), `MB MAX` to the
-//! travel limit when the interpreter knows it. M97 (small contour steps) and M98 (open contour
+//! retracts along the tool axis after the block's motion: `MB d` by d (rapid), `MB MAX` until
+//! a linear machine axis reaches its travel limit (see [`super::retract`]). M97 (small contour steps) and M98 (open contour
 //! corner) act on the corner at the end of their own block: they are passed on before the
 //! block's motion as [`OpKind::CornerRule`] for the radius compensation stage; M6 is
 //! accepted and does nothing (TOOL CALL changes the tool).
@@ -171,14 +172,15 @@ impl MWords {
         let axis = mc.tool_axis;
         let target = match w.mb {
             Some(Some(v)) => mc.pos[axis] + mc.params.value(v) * mc.unit,
-            Some(None) => match mc.retract_limit {
-                Some(limit) => limit,
+            Some(None) => match mc.retract_distance() {
+                Some(s) => mc.pos[axis] + s,
                 None => {
                     return Err(at(
                         self.retract_pos,
-                        ProgramError::NotSupported(
-                            "M140 MB MAX without a known travel limit of the tool axis".into(),
-                        ),
+                        ProgramError::NotSupported(format!(
+                            "M140 MB MAX without a known travel of the tool axis {axis} \
+                             (give the machine with --machine, or `travel` for {axis})"
+                        )),
                     ));
                 }
             },

@@ -24,6 +24,7 @@ pub(crate) mod plane;
 pub(crate) mod plane_math;
 pub(crate) mod plane_output;
 pub(crate) mod plane_turn;
+pub(crate) mod retract;
 pub(crate) mod strings;
 pub(crate) mod structure;
 pub(crate) mod system;

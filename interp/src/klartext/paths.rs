@@ -41,6 +41,28 @@ impl Machine {
         }))
     }
 
+    /// The end of an `L` block with M91 or M92: its absolute coordinates are machine
+    /// coordinates, measured from the machine datum (M91) or the machine builder's fixed
+    /// position (M92; klar's machines put it at the machine datum), so neither the active
+    /// preset nor a datum shift, mirror, rotation or scaling acts on them; incremental words
+    /// move by their amount along the machine axis. Axes the block does not name stay where
+    /// they are on the machine. The result is in program coordinates, like every position.
+    fn machine_datum_target(&self, w: &Words) -> Result<Pose, ExecError> {
+        if !self.tilt.identity {
+            return Err(here(ProgramError::NotSupported(
+                "M91/M92 in a tilted working plane".into(),
+            )));
+        }
+        let mut machine = self.cyc.xf.map_point(&self.pos);
+        for a in AxisLetter::ALL {
+            if let Some(c) = &w.axes[a.index()] {
+                let v = self.length(a, self.params.value(c.value));
+                machine[a] = if c.incremental { machine[a] + v } else { v };
+            }
+        }
+        Ok(self.cyc.xf.unmap_point(&machine))
+    }
+
     /// Computes the motion op of a path block (None when nothing moves).
     pub(super) fn motion(&mut self, stmt: &Stmt, w: &Words) -> Result<Option<OpKind>, ExecError> {
         let feed = self.feed(w.feed)?;
@@ -48,6 +70,9 @@ impl Machine {
         match stmt {
             Stmt::Line => {
                 let mut to = self.target(w);
+                if w.m_words().any(|(n, _)| n == 91 || n == 92) {
+                    to = self.machine_datum_target(w)?;
+                }
                 if let Some((longer, pos)) = w.paraxial {
                     to = self.paraxial(from, to, longer, pos)?;
                 }

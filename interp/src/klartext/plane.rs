@@ -682,7 +682,7 @@ impl Machine {
     }
 
     /// The present position in untilted workpiece coordinates (after the cycle transforms).
-    fn workpiece_pos(&self) -> Pose {
+    pub(super) fn workpiece_pos(&self) -> Pose {
         let mut m = self.cyc.xf.map_point(&self.pos);
         let p = pm::apply(
             &self.tilt.r,

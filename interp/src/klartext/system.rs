@@ -325,8 +325,19 @@ impl Machine {
         let (base_len, base_rad) = match tc.tool {
             None => (self.tool_base.0, self.tool_base.1),
             Some(_) => match self.tools.lookup(self.tool, self.tool_name.as_deref()) {
-                Some(t) => (t.length + t.dl, t.radius + t.dr),
-                None if self.tools.is_empty() || self.tool == Some(0) => (0.0, 0.0),
+                Some(t) => {
+                    self.tool_unknown = None;
+                    (t.length + t.dl, t.radius + t.dr)
+                }
+                None if self.tools.is_empty() || self.tool == Some(0) => {
+                    // tool 0 is the zero tool; any other is known to nobody here
+                    self.tool_unknown = match (&self.tool_name, self.tool) {
+                        (Some(n), _) => Some(format!("\"{n}\"")),
+                        (None, Some(0)) => None,
+                        (None, t) => Some(t.unwrap_or(0).to_string()),
+                    };
+                    (0.0, 0.0)
+                }
                 None => {
                     return Err(here(ProgramError::UnknownTool(match &self.tool_name {
                         Some(n) => format!("\"{n}\""),

@@ -287,6 +287,7 @@ function drawSpeedPlot() {
 (async () => {
   const m = await api("GET", "/api/machine");
   $("machine-name").textContent = m.name;
+  $("machine-preset").textContent = "preset " + m.preset;
   buildDro(m.letters);
   await loadProgramList();
   connect();

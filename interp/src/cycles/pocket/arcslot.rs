@@ -159,7 +159,10 @@ pub(super) fn circular_slot(
     let w = width / 2.0;
     let rm = dia / 2.0;
     if !(r.is_finite() && r > 0.0) {
-        return Err(p.geometry(format!("tool radius {r} is not usable")));
+        return Err(CycleError::ToolRadius {
+            cycle: p.cycle,
+            radius: r,
+        });
     }
     if w < r - EPS {
         return Err(p.geometry(format!(

@@ -166,7 +166,10 @@ fn run(p: &Params, ctx: &CycleContext, f: &Face, out: &mut Vec<Move>) -> Result<
     }
     let r = ctx.tool_radius;
     if !(r.is_finite() && r > 0.0) {
-        return Err(p.geometry(format!("tool radius {r} is not usable")));
+        return Err(CycleError::ToolRadius {
+            cycle: p.cycle,
+            radius: r,
+        });
     }
 
     let to_plane = |x: f64, y: f64| {

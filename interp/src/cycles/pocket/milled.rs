@@ -137,7 +137,10 @@ fn common(
     }
     let r = ctx.tool_radius;
     if !(r.is_finite() && r > 0.0) {
-        return Err(p.geometry(format!("tool radius {r} is not usable")));
+        return Err(CycleError::ToolRadius {
+            cycle: p.cycle,
+            radius: r,
+        });
     }
     if shape.half_min() < r - EPS {
         return Err(p.geometry(format!(

@@ -153,7 +153,10 @@ fn run(p: &Params, ctx: &CycleContext, stud: &Stud, out: &mut Vec<Move>) -> Resu
     }
     let r = ctx.tool_radius;
     if !(r.is_finite() && r > 0.0) {
-        return Err(p.geometry(format!("tool radius {r} is not usable")));
+        return Err(CycleError::ToolRadius {
+            cycle: p.cycle,
+            radius: r,
+        });
     }
     let step = overlap * 2.0 * r;
     let material = (stud.extra - side).max(0.0);
