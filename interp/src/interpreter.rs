@@ -84,7 +84,7 @@ impl Unit {
         Unit {
             path,
             file_id,
-            reader: BlockReader::new(input),
+            reader: BlockReader::klartext(input),
             phase: Phase::BeforeBegin,
             labels: HashMap::new(),
             seen_to: BlockStart { offset: 0, line: 1 },

@@ -3,9 +3,15 @@
 //! A block is one physical line, or several when a line ends in `~` (continuation). Line ends
 //! may be LF or CRLF; the last line needs no line end. The joined block text keeps the raw
 //! bytes (the `~` becomes a space, physical lines are joined with `\n`), so a `;` comment ends
-//! at the end of its physical line. Bytes are never decoded up front: columns are computed on
-//! demand, counting UTF-8 characters when the physical line is valid UTF-8 and bytes (latin-1)
-//! otherwise. Only the current block is held in memory; each block remembers the byte offset
+//! at the end of its physical line.
+//!
+//! Klartext readers ([`BlockReader::klartext`]) know the `;` comment: a `~` before a trailing
+//! comment (`CYCL DEF 200 BOHREN ~ ;note`) continues the block too, and a `~` at the end of a
+//! comment is kept in the text, where it tells the lexer that the comment goes on over the
+//! next line (a control wraps long comments that way).
+//!
+//! Bytes are never decoded up front: columns are computed on demand, counting UTF-8
+//! characters when the physical line is valid UTF-8 and bytes (latin-1) otherwise. Only the current block is held in memory; each block remembers the byte offset
 //! and line of its first physical line so that a later jump can seek back to it.
 
 use std::io::{self, BufRead, Seek, SeekFrom};
@@ -41,6 +47,8 @@ pub(crate) struct BlockReader {
     next_offset: u64,
     /// Line and column just after the last byte read (for "missing at end of file").
     end_pos: (u32, u32),
+    /// Klartext: `;` starts a comment (see the module notes).
+    klartext: bool,
 }
 
 impl BlockReader {
@@ -53,6 +61,16 @@ impl BlockReader {
             next_line: 1,
             next_offset: 0,
             end_pos: (1, 1),
+            klartext: false,
+        }
+    }
+
+    /// Wraps a Klartext source positioned at its start: `~` continuations know `;` comments
+    /// (see the module notes).
+    pub fn klartext(input: Box<dyn ProgramInput>) -> Self {
+        BlockReader {
+            klartext: true,
+            ..BlockReader::new(input)
         }
     }
 
@@ -75,6 +93,8 @@ impl BlockReader {
             line: self.next_line,
         };
         let mut any = false;
+        // the line read continues a comment (the one before ended in a comment and `~`)
+        let mut in_comment = false;
         loop {
             if !self.buf.is_empty() {
                 self.buf.push(b'\n');
@@ -110,17 +130,15 @@ impl BlockReader {
                 start: seg_start,
                 line: line_no,
             });
-            let trimmed = body
-                .iter()
-                .rposition(|b| !b.is_ascii_whitespace())
-                .map(|p| seg_start + p);
-            match trimmed {
-                Some(i) if self.buf.get(i) == Some(&b'~') => {
-                    if let Some(b) = self.buf.get_mut(i) {
+            match continuation(body, self.klartext, in_comment) {
+                Some(Tilde::Code(i)) => {
+                    in_comment = false;
+                    if let Some(b) = self.buf.get_mut(seg_start + i) {
                         *b = b' ';
                     }
                 }
-                _ => break,
+                Some(Tilde::Comment) => in_comment = true,
+                None => break,
             }
         }
         Ok(if any { Some(start) } else { None })
@@ -174,6 +192,50 @@ impl BlockReader {
     }
 }
 
+/// A `~` that continues a block on the next line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Tilde {
+    /// In the code of the line, at this byte: it becomes a blank.
+    Code(usize),
+    /// At the end of a Klartext comment: it stays in the text for the lexer.
+    Comment,
+}
+
+/// Whether a physical line continues on the next one: its last non-blank byte is `~`, or (in
+/// Klartext) the last non-blank byte before a trailing `;` comment is. `in_comment`: the whole
+/// line is the continuation of a comment.
+fn continuation(line: &[u8], klartext: bool, in_comment: bool) -> Option<Tilde> {
+    let last = |s: &[u8]| s.iter().rposition(|b| !b.is_ascii_whitespace());
+    let end = last(line)?;
+    let code_end = match (klartext, in_comment) {
+        (false, _) => None,
+        (true, true) => Some(0),
+        (true, false) => comment_start(line),
+    };
+    match code_end {
+        Some(c) => match last(line.get(..c).unwrap_or(&[])) {
+            Some(i) if line.get(i) == Some(&b'~') => Some(Tilde::Code(i)),
+            _ if line.get(end) == Some(&b'~') => Some(Tilde::Comment),
+            _ => None,
+        },
+        None if line.get(end) == Some(&b'~') => Some(Tilde::Code(end)),
+        None => None,
+    }
+}
+
+/// Where the `;` comment of a Klartext line starts (a `;` inside `"…"` is text).
+fn comment_start(line: &[u8]) -> Option<usize> {
+    let mut quoted = false;
+    for (i, &b) in line.iter().enumerate() {
+        match b {
+            b'"' => quoted = !quoted,
+            b';' if !quoted => return Some(i),
+            _ => {}
+        }
+    }
+    None
+}
+
 /// Characters in a UTF-8 byte slice, counting latin-1 bytes as one each when invalid.
 fn char_count(bytes: &[u8]) -> u32 {
     if std::str::from_utf8(bytes).is_ok() {
@@ -212,6 +274,25 @@ mod tests {
         assert_eq!(r.text(), b"2 L X+1");
         assert_eq!(r.end_position(), (3, 8));
         assert!(r.next_block().unwrap().is_none());
+    }
+
+    #[test]
+    fn klartext_comments_and_tildes() {
+        let mut r = BlockReader::klartext(Box::new(Cursor::new(
+            b"1 CYCL DEF 200 X ~ ;note\n Q200=2 ;A ~\n Q201=3\n2 L ; a ~ b\n3 QS1 = \"a;~\" ~\n + \"b\"\n".to_vec(),
+        )));
+        r.next_block().unwrap();
+        // the `~` before the comment continues the block and becomes a blank; the one at
+        // the end of a comment stays for the lexer
+        assert_eq!(r.text(), b"1 CYCL DEF 200 X   ;note\n Q200=2 ;A ~\n Q201=3");
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"2 L ; a ~ b");
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"3 QS1 = \"a;~\"  \n + \"b\"");
+        // other dialects know no `;` comment: only a final `~` continues
+        let mut r = reader(b"N10 G01 ~ ;x\nN20\n");
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"N10 G01 ~ ;x");
     }
 
     #[test]
