@@ -49,6 +49,10 @@ pub(crate) struct BlockReader {
     end_pos: (u32, u32),
     /// Klartext: `;` starts a comment (see the module notes).
     klartext: bool,
+    /// A line read ahead (to see whether it continues an SPL block) and not used yet.
+    held: Vec<u8>,
+    /// True when `held` holds such a line.
+    held_ready: bool,
 }
 
 impl BlockReader {
@@ -62,6 +66,8 @@ impl BlockReader {
             next_offset: 0,
             end_pos: (1, 1),
             klartext: false,
+            held: Vec::new(),
+            held_ready: false,
         }
     }
 
@@ -100,7 +106,7 @@ impl BlockReader {
                 self.buf.push(b'\n');
             }
             let seg_start = self.buf.len();
-            let n = self.input.read_until(b'\n', &mut self.buf)?;
+            let n = self.read_line()?;
             if n == 0 {
                 // nothing more: drop the separator pushed for a continuation
                 self.buf
@@ -138,10 +144,39 @@ impl BlockReader {
                     }
                 }
                 Some(Tilde::Comment) => in_comment = true,
+                None if self.klartext && self.spline_goes_on()? => in_comment = false,
                 None => break,
             }
         }
         Ok(if any { Some(start) } else { None })
+    }
+
+    /// Appends the next physical line (the one read ahead, if any) to the block buffer;
+    /// returns its length in bytes, 0 at the end of the input.
+    fn read_line(&mut self) -> io::Result<usize> {
+        if self.held_ready {
+            self.held_ready = false;
+            self.buf.extend_from_slice(&self.held);
+            return Ok(self.held.len());
+        }
+        self.input.read_until(b'\n', &mut self.buf)
+    }
+
+    /// True when the block read so far is an SPL block and the next line starts with a
+    /// spline coefficient (`K3X…`): the manual prints an SPL block that way, its coefficient
+    /// lines without block number or `~`. The next line is read ahead and kept.
+    fn spline_goes_on(&mut self) -> io::Result<bool> {
+        if !is_spline_block(&self.buf) {
+            return Ok(false);
+        }
+        if !self.held_ready {
+            self.held.clear();
+            if self.input.read_until(b'\n', &mut self.held)? == 0 {
+                return Ok(false);
+            }
+            self.held_ready = true;
+        }
+        Ok(starts_with_coefficient(&self.held))
     }
 
     /// Line and column (1-based, in characters) of a byte position in the current block.
@@ -185,6 +220,7 @@ impl BlockReader {
 
     /// Moves the reader so that the next block read starts at `start` (for jumps).
     pub fn seek(&mut self, start: BlockStart) -> io::Result<()> {
+        self.held_ready = false;
         self.input.seek(SeekFrom::Start(start.offset))?;
         self.next_offset = start.offset;
         self.next_line = start.line;
@@ -221,6 +257,53 @@ fn continuation(line: &[u8], klartext: bool, in_comment: bool) -> Option<Tilde> 
         None if line.get(end) == Some(&b'~') => Some(Tilde::Code(end)),
         None => None,
     }
+}
+
+/// True for a Klartext block whose keyword is `SPL` (`[/][N]nr[/] SPL …`).
+fn is_spline_block(text: &[u8]) -> bool {
+    let mut i = 0;
+    let blanks = |i: &mut usize| {
+        while matches!(text.get(*i), Some(b' ' | b'\t')) {
+            *i += 1;
+        }
+    };
+    blanks(&mut i);
+    if text.get(i) == Some(&b'/') {
+        i += 1;
+        blanks(&mut i);
+    }
+    if text.get(i).is_some_and(|b| b.eq_ignore_ascii_case(&b'N'))
+        && text.get(i + 1).is_some_and(u8::is_ascii_digit)
+    {
+        i += 1;
+    }
+    while text.get(i).is_some_and(u8::is_ascii_digit) {
+        i += 1;
+    }
+    blanks(&mut i);
+    if text.get(i) == Some(&b'/') {
+        i += 1;
+        blanks(&mut i);
+    }
+    text.get(i..i + 3)
+        .is_some_and(|w| w.eq_ignore_ascii_case(b"SPL"))
+        && !text
+            .get(i + 3)
+            .is_some_and(|b| b.is_ascii_alphanumeric() || *b == b'_')
+}
+
+/// True for a line that starts (after blanks) with a spline coefficient word `K3X`, `K2Y`,
+/// `K1A`, … .
+fn starts_with_coefficient(line: &[u8]) -> bool {
+    let i = line
+        .iter()
+        .position(|b| !matches!(b, b' ' | b'\t'))
+        .unwrap_or(line.len());
+    matches!(
+        line.get(i..i + 3),
+        Some([k, b'1'..=b'3', axis])
+            if k.eq_ignore_ascii_case(&b'K') && b"XYZABCUVW".contains(&axis.to_ascii_uppercase())
+    )
 }
 
 /// Where the `;` comment of a Klartext line starts (a `;` inside `"…"` is text).
@@ -293,6 +376,49 @@ mod tests {
         let mut r = reader(b"N10 G01 ~ ;x\nN20\n");
         r.next_block().unwrap();
         assert_eq!(r.text(), b"N10 G01 ~ ;x");
+    }
+
+    #[test]
+    fn spline_coefficient_lines_join_the_spl_block() {
+        let text = b"7 SPL X+1 Y+2\n K3X+0 K2X+0 K1X+1\nK3Y+0 K2Y+0 K1Y+2 F100\n8 L X+0\nK3X+1\n";
+        let mut r = BlockReader::klartext(Box::new(Cursor::new(text.to_vec())));
+        let b = r.next_block().unwrap().unwrap();
+        assert_eq!(b, BlockStart { offset: 0, line: 1 });
+        assert_eq!(
+            r.text(),
+            b"7 SPL X+1 Y+2\n K3X+0 K2X+0 K1X+1\nK3Y+0 K2Y+0 K1Y+2 F100"
+        );
+        let k = r.text().iter().rposition(|&c| c == b'K').unwrap();
+        assert_eq!(r.position(k), (3, 13));
+        // the line read ahead starts the next block, at its own offset and line
+        assert_eq!(
+            r.next_start(),
+            BlockStart {
+                offset: 56,
+                line: 4
+            }
+        );
+        let b = r.next_block().unwrap().unwrap();
+        assert_eq!(
+            b,
+            BlockStart {
+                offset: 56,
+                line: 4
+            }
+        );
+        assert_eq!(r.text(), b"8 L X+0");
+        // after any other block a K line stays a block of its own
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"K3X+1");
+        assert!(r.next_block().unwrap().is_none());
+        // a seek drops the line read ahead
+        let mut r = BlockReader::klartext(Box::new(Cursor::new(b"SPL X+1\nL X+2\n".to_vec())));
+        r.next_block().unwrap();
+        r.seek(BlockStart { offset: 0, line: 1 }).unwrap();
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"SPL X+1");
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"L X+2");
     }
 
     #[test]

@@ -6,7 +6,7 @@
 mod common;
 use common::*;
 use klar_interp::{
-    AxisLetter, OpKind, Pose,
+    AxisLetter, Feed, OpKind, Pose,
     op::{SpindleDir, SpindleSpeed},
 };
 
@@ -149,4 +149,100 @@ fn a_comment_after_the_tilde_of_a_cycle_head_keeps_the_parameters_in_the_block()
     ));
     let (_, d) = run_until_error(&broken);
     assert_eq!(d.to_string(), "t.h:6:3: missing value after Q201=");
+}
+
+/// The example of the SPL manual page (seeds/), blocks 7 and 8 as printed there.
+const SEED_SPL: &str = "7 L X+33.909 Y-25.838 Z+75.107 A+17 B-10.103 F MAX
+8 SPL X+39.824 Y-28.378 Z+77.425 A+17.32 B-12.75
+K3X+0.0983 K2X-0.441 K1X-5.5724
+K3Y-0.0422 K2Y+0.1893 K1Y+2.3929
+K3Z+0.0015 K2Z-0.9549 K1Z+3.0875
+K3A+0.1283 K2A-0.141 K1A-0.5724
+K3B+0.0083 K2B-0.413 E+2 K1B-1.5724 E+1 F10000";
+
+/// `text` with its lines that start with a K coefficient joined to the line before them.
+fn one_line(text: &str) -> String {
+    text.replace("\nK", " K")
+}
+
+#[test]
+fn spl_coefficient_lines_as_the_manual_prints_them() {
+    // block 8 alone, from the point where its polynomials start (t = 1)
+    let block8 = SEED_SPL.split_once('\n').map_or("", |(_, b)| b);
+    let mut start = Pose::xyz(
+        39.824 + 0.0983 - 0.441 - 5.5724,
+        -28.378 - 0.0422 + 0.1893 + 2.3929,
+        77.425 + 0.0015 - 0.9549 + 3.0875,
+    );
+    start[AxisLetter::A] = 17.32 + 0.1283 - 0.141 - 0.5724;
+    start[AxisLetter::B] = -12.75 + 0.0083 - 41.3 - 15.724;
+    let wrapped = run_from(&program(block8), start);
+    let joined = run_from(&program(&one_line(block8)), start);
+    assert_eq!(motions(&wrapped), motions(&joined));
+    match &motions(&wrapped)[..] {
+        [OpKind::Spline { to, axes, feed, .. }] => {
+            assert_eq!(axes.len(), 5);
+            close(to[AxisLetter::B], -12.75);
+            close(axes[4].k[1], -41.3);
+            close(axes[4].k[2], -15.724);
+            assert_eq!(*feed, Feed::Rate(10000.0 / 60.0));
+        }
+        other => panic!("{other:?}"),
+    }
+    // the op keeps the line of the SPL keyword; END PGM after it is on line 8
+    assert_eq!(wrapped.first().map(|o| o.loc.line), Some(2));
+    assert_eq!(wrapped.last().map(|o| o.loc.line), Some(8));
+}
+
+#[test]
+fn the_manual_example_runs_as_on_one_line() {
+    // Blocks 7 and 8 of the page together: the page's numbers do not meet (the polynomial
+    // of Z starts 4.4521 mm above block 7's end), in both layouts with the same message.
+    let wrapped = program(SEED_SPL);
+    let (ops_w, d_w) = run_until_error(&wrapped);
+    let (ops_j, d_j) = run_until_error(&program(&one_line(SEED_SPL)));
+    assert_eq!(motions(&ops_w), motions(&ops_j));
+    assert_eq!(d_w, d_j);
+    assert_eq!(
+        d_w.to_string(),
+        "t.h:3:1: block 8: SPL starts at Z+79.5591, 4.4521 mm away from the previous end point Z+75.1070 (more than 0.001 mm)"
+    );
+    // the syntax check accepts the page's text
+    let path = temp_file("seed_spl.h", wrapped.as_bytes());
+    assert_eq!(klar_interp::syntax_check(&path), Ok(()));
+    remove_temp(&path);
+}
+
+#[test]
+fn spl_lines_from_a_cam_post() {
+    let body = "7 SPL X+28.338 Y+53.45 Z-2.42\nK3X+0.0983 K2X-0.441 K1X-5.5724\nK3Y+0.0000 K2Y+0.0000 K1Y+0.0000\nK3Z+0.0000 K2Z+0.0000 K1Z-0.3144 F1000\n8 L X+30";
+    let start = Pose::xyz(28.338 + 0.0983 - 0.441 - 5.5724, 53.45, -2.42 - 0.3144);
+    let ops = run_from(&program(body), start);
+    assert_eq!(
+        motions(&ops),
+        motions(&run_from(&program(&one_line(body)), start))
+    );
+    let lines: Vec<u32> = ops
+        .iter()
+        .filter(|o| o.kind.is_motion())
+        .map(|o| o.loc.line)
+        .collect();
+    assert_eq!(lines, vec![2, 6]);
+}
+
+#[test]
+fn a_coefficient_line_after_another_block_is_an_error() {
+    let (_, d) = run_until_error(&program("L X+1 F100\nK3X+0.1 K2X+0 K1X-0.1"));
+    assert_eq!(
+        d.to_string(),
+        "t.h:3:1: unexpected spline coefficients outside an SPL block (a line of K3/K2/K1 words continues the SPL block right before it)"
+    );
+    // an empty line ends the SPL block: the block misses Y's triple, the K line stays alone
+    let (_, d) = run_until_error(&program(
+        "SPL X+0 Y+0 K3X+0 K2X+0 K1X+0 F100\n\nK3Y+0 K2Y+0 K1Y+0",
+    ));
+    assert_eq!(
+        d.to_string(),
+        "t.h:2:9: SPL: every end coordinate needs its K3, K2 and K1 (an axis is missing its triple)"
+    );
 }

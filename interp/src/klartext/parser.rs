@@ -414,6 +414,14 @@ impl Parser {
             b"LN" => unsupported("LN"),
             b"TRANS" => unsupported("TRANS"),
             b"SYSCALL" => unsupported("SYSCALL"),
+            b"K" if lx.byte_at(t.end()).is_some_and(|b| b.is_ascii_digit()) => Err((
+                t.start(),
+                ProgramError::Unexpected(
+                    "spline coefficients outside an SPL block (a line of K3/K2/K1 words continues \
+                     the SPL block right before it)"
+                        .into(),
+                ),
+            )),
             _ => Err((t.start(), ProgramError::UnknownBlock(text_of(lx.slice(t))))),
         }
     }
