@@ -9,7 +9,7 @@ use crate::diag::{Diagnostic, ProgramError};
 use crate::dialect::{Dialect, DialectRun, detect_dialect, runner};
 use crate::klartext::cycle_table::DatumTable;
 use crate::klartext::exec::{Blank, Flow, LabelKey, Machine};
-use crate::klartext::parser::{LabelRef, Parser, Stmt};
+use crate::klartext::parser::{Block, LabelRef, Parser, Stmt, is_begin_block};
 use crate::klartext::tools::ToolTable;
 use crate::op::{Op, Pose, SourceLoc};
 use crate::source::{BlockReader, BlockStart, ProgramInput};
@@ -84,6 +84,11 @@ struct Unit {
     calls: Vec<BlockStart>,
     /// Repeats left per section-repeat block (keyed by the block's byte offset).
     repeats: HashMap<u64, u32>,
+    /// Blocks before BEGIN PGM that were passed over: where the first starts (line,
+    /// column) and the last line they took.
+    ignored: Option<(u32, u32, u32)>,
+    /// The program name written in BEGIN PGM.
+    begin_name: Vec<u8>,
 }
 
 impl Unit {
@@ -97,6 +102,8 @@ impl Unit {
             seen_to: BlockStart { offset: 0, line: 1 },
             calls: Vec::new(),
             repeats: HashMap::new(),
+            ignored: None,
+            begin_name: Vec::new(),
         }
     }
 }
@@ -138,6 +145,8 @@ pub struct Interpreter {
     /// the operator set during a program stop, a called program or a table that is not
     /// there): what it says in words.
     depends_on: Option<String>,
+    /// Forms accepted with leniency (see [`Interpreter::warnings`]).
+    warnings: Vec<Diagnostic>,
 }
 
 impl std::fmt::Debug for Interpreter {
@@ -231,6 +240,7 @@ impl Interpreter {
             undecided: Vec::new(),
             missing: Vec::new(),
             depends_on: None,
+            warnings: Vec::new(),
         }
     }
 
@@ -365,6 +375,98 @@ impl Interpreter {
         }
     }
 
+    /// Warnings so far: forms that are accepted but not as HEIDENHAIN writes them, each
+    /// located as `file:line:col: message` like an error. Lines before `BEGIN PGM` are passed
+    /// over (one warning names them when BEGIN PGM comes), and an `END PGM` whose program name
+    /// differs from the one of `BEGIN PGM` is warned about. Each warning is kept once, at most
+    /// [`CHECK_DIAGNOSTIC_LIMIT`]; TNC ISO and lathe DIN programs have none.
+    pub fn warnings(&self) -> &[Diagnostic] {
+        &self.warnings
+    }
+
+    /// Records a warning (once; at most [`CHECK_DIAGNOSTIC_LIMIT`]).
+    fn warn(&mut self, d: Diagnostic) {
+        if self.warnings.len() < CHECK_DIAGNOSTIC_LIMIT && !self.warnings.contains(&d) {
+            self.warnings.push(d);
+        }
+    }
+
+    /// Passes over the current block, which stands before BEGIN PGM.
+    fn ignore_before_begin(&mut self) {
+        let Some(u) = self.units.last_mut() else {
+            return;
+        };
+        let text = u.reader.text();
+        let first = text
+            .iter()
+            .position(|b| !b.is_ascii_whitespace())
+            .unwrap_or(0);
+        let (line, col) = u.reader.position(first);
+        let (last, _) = u.reader.position(text.len());
+        match &mut u.ignored {
+            Some((_, _, l)) => *l = last,
+            None => u.ignored = Some((line, col, last)),
+        }
+    }
+
+    /// BEGIN PGM read: the warning about the lines passed over before it, and the name.
+    fn note_begin(&mut self) {
+        let Some(u) = self.units.last_mut() else {
+            return;
+        };
+        let (s, e) = self.parser.program_name;
+        u.begin_name = u.reader.text().get(s..e).unwrap_or(&[]).to_vec();
+        if let Some((line, col, last)) = u.ignored.take() {
+            let message = if last > line {
+                format!("lines {line} to {last} before BEGIN PGM ignored")
+            } else {
+                format!("line {line} before BEGIN PGM ignored")
+            };
+            let d = Diagnostic::with_message(u.path.clone(), line, col, None, message);
+            self.warn(d);
+        }
+    }
+
+    /// No BEGIN PGM before END PGM or the end of the text: the error stands where the
+    /// program should have begun (the first line passed over), else at `fallback`.
+    fn missing_begin(&mut self, fallback: Diagnostic) -> Diagnostic {
+        match self.units.last_mut().and_then(|u| u.ignored.take()) {
+            Some((line, col, _)) => Diagnostic {
+                line,
+                col,
+                block: None,
+                message: ProgramError::MissingBegin.to_string(),
+                ..fallback
+            },
+            None => fallback,
+        }
+    }
+
+    /// END PGM read: a warning when it names another program than BEGIN PGM.
+    fn check_end_name(&mut self, block: &Block) {
+        let Some(u) = self.units.last() else {
+            return;
+        };
+        let (s, e) = self.parser.program_name;
+        let name = u.reader.text().get(s..e).unwrap_or(&[]);
+        if name == u.begin_name.as_slice() {
+            return;
+        }
+        let begin = String::from_utf8_lossy(&u.begin_name);
+        let message = if name.is_empty() {
+            format!("END PGM names no program (BEGIN PGM {begin})")
+        } else {
+            format!(
+                "END PGM {} does not match BEGIN PGM {begin}",
+                String::from_utf8_lossy(name)
+            )
+        };
+        let at = if name.is_empty() { block.start } else { s };
+        let (line, col) = u.reader.position(at);
+        let d = Diagnostic::with_message(u.path.clone(), line, col, block.number, message);
+        self.warn(d);
+    }
+
     /// The program files in use: index = [`SourceLoc::file`] (0 = the main program).
     pub fn files(&self) -> &[PathBuf] {
         &self.files
@@ -410,7 +512,10 @@ impl Interpreter {
                     Phase::BeforeBegin => Some(ProgramError::MissingBegin),
                     _ => Some(ProgramError::MissingEnd),
                 };
-                let d = error.map(|e| self.diag_end(&e));
+                let mut d = error.map(|e| self.diag_end(&e));
+                if was == Phase::BeforeBegin {
+                    d = d.map(|d| self.missing_begin(d));
+                }
                 if self.units.len() > 1 && mode != Mode::Syntax && d.is_none() {
                     self.units.pop();
                     self.machine.params.leave_program();
@@ -433,6 +538,11 @@ impl Interpreter {
             Ok(b) => b,
             Err(pe) => {
                 if u.phase == Phase::BeforeBegin {
+                    if !is_begin_block(u.reader.text()) {
+                        // text before the program (a CAM header, a `%` line) is passed over
+                        self.ignore_before_begin();
+                        return Ok(());
+                    }
                     u.phase = Phase::Running;
                 }
                 return Err(self.diag_at(pe.pos, pe.number, &pe.error));
@@ -451,6 +561,13 @@ impl Interpreter {
         let Some(u) = self.units.last_mut() else {
             return Ok(());
         };
+        if matches!(block.stmt, Stmt::EndPgm) && matches!(u.phase, Phase::Running | Phase::Stopped)
+        {
+            self.check_end_name(&block);
+        }
+        let Some(u) = self.units.last_mut() else {
+            return Ok(());
+        };
         match (u.phase, &block.stmt) {
             (Phase::BeforeBegin, Stmt::BeginPgm { inch }) => {
                 if self.units.len() == 1 {
@@ -459,12 +576,19 @@ impl Interpreter {
                 if let Some(u) = self.units.last_mut() {
                     u.phase = Phase::Running;
                 }
+                self.note_begin();
                 self.blocks += 1;
                 return Ok(());
             }
-            (Phase::BeforeBegin, _) => {
+            (Phase::BeforeBegin, Stmt::EndPgm) => {
+                // END PGM without BEGIN PGM: no program at all
                 u.phase = Phase::Running;
-                return Err(self.diag_at(block.start, block.number, &ProgramError::MissingBegin));
+                let d = self.diag_at(block.start, block.number, &ProgramError::MissingBegin);
+                return Err(self.missing_begin(d));
+            }
+            (Phase::BeforeBegin, _) => {
+                self.ignore_before_begin();
+                return Ok(());
             }
             (Phase::Ended | Phase::Done, _) => {
                 return Err(self.diag_at(block.start, block.number, &ProgramError::AfterEnd));

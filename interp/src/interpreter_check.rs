@@ -80,6 +80,9 @@ pub struct CheckReport {
     /// read (FN 18 ID240/ID270) after a program stop, where the operator may have moved the
     /// axes, or from a missing file's data.
     pub undecided: Vec<Diagnostic>,
+    /// Forms accepted with leniency: the program runs, but not as written (see
+    /// [`Interpreter::warnings`]).
+    pub warnings: Vec<Diagnostic>,
 }
 
 /// [`check`] with what it could not decide before the run.
@@ -105,6 +108,7 @@ impl Interpreter {
             errors,
             missing: std::mem::take(&mut self.missing),
             undecided: std::mem::take(&mut self.undecided),
+            warnings: std::mem::take(&mut self.warnings),
         }
     }
 }

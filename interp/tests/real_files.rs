@@ -6,7 +6,7 @@
 mod common;
 use common::*;
 use klar_interp::{
-    AxisLetter, Feed, OpKind, Pose,
+    AxisLetter, Feed, Interpreter, OpKind, Pose,
     op::{SpindleDir, SpindleSpeed},
 };
 
@@ -245,4 +245,109 @@ fn a_coefficient_line_after_another_block_is_an_error() {
         d.to_string(),
         "t.h:2:9: SPL: every end coordinate needs its K3, K2 and K1 (an axis is missing its triple)"
     );
+}
+
+/// Runs a program to its end; returns the ops and the interpreter's warnings as text.
+fn run_with_warnings(text: &str) -> (Vec<klar_interp::Op>, Vec<String>) {
+    let mut it = Interpreter::from_source("t.h", text, Pose::ZERO);
+    let ops: Vec<_> = it
+        .by_ref()
+        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
+        .collect();
+    let warnings = it.warnings().iter().map(ToString::to_string).collect();
+    (ops, warnings)
+}
+
+#[test]
+fn lines_before_begin_pgm_are_passed_over_with_a_warning() {
+    let text =
+        "%PART17\nL X+50 F100\n(header of a post)\n\nBEGIN PGM T MM\nL X+1 F100\nEND PGM T MM\n";
+    let (ops, warnings) = run_with_warnings(text);
+    // the L block before BEGIN PGM does not run
+    let m = motions(&ops);
+    assert_eq!(m.len(), 1);
+    assert!(matches!(m[0], OpKind::Line { to, .. } if to == Pose::xyz(1.0, 0.0, 0.0)));
+    assert_eq!(ops[0].loc.line, 6);
+    assert_eq!(
+        warnings,
+        vec!["t.h:1:1: lines 1 to 2 before BEGIN PGM ignored"]
+    );
+    // one line, indented
+    let (_, warnings) = run_with_warnings("  %\nBEGIN PGM T MM\nEND PGM T MM\n");
+    assert_eq!(warnings, vec!["t.h:1:3: line 1 before BEGIN PGM ignored"]);
+    // comments and empty lines before BEGIN PGM are no news
+    let (_, warnings) = run_with_warnings("; made by hand\n\nBEGIN PGM T MM\nEND PGM T MM\n");
+    assert!(warnings.is_empty(), "{warnings:?}");
+}
+
+#[test]
+fn a_program_without_begin_pgm_is_still_refused() {
+    // the error stands where the program should have begun
+    let (ops, d) = run_until_error("%\nL X+1 F100\nL X+2\n");
+    assert!(ops.is_empty());
+    assert_eq!(
+        d.to_string(),
+        "t.h:1:1: missing BEGIN PGM: a Klartext program starts with `BEGIN PGM name MM|INCH`"
+    );
+    let (_, d) = run_until_error("\n  L X+1 F100\nEND PGM T MM\n");
+    assert_eq!((d.line, d.col), (2, 3));
+    assert!(d.message.starts_with("missing BEGIN PGM"), "{d}");
+    // a broken BEGIN PGM is an error, not text before the program
+    let (_, d) = run_until_error("%\nBEGIN PGM T\nEND PGM T MM\n");
+    assert_eq!(
+        d.to_string(),
+        "t.h:2:11: BEGIN PGM needs the unit MM or INCH after the name"
+    );
+}
+
+#[test]
+fn end_pgm_with_another_name_runs_with_a_warning() {
+    let (ops, warnings) =
+        run_with_warnings("BEGIN PGM PART-1 MM\nL X+1 F100\n3 END PGM PART-2 MM ; saved as\n");
+    assert_eq!(motions(&ops).len(), 1);
+    assert!(matches!(ops.last().map(|o| &o.kind), Some(OpKind::End)));
+    assert_eq!(
+        warnings,
+        vec!["t.h:3:11: block 3: END PGM PART-2 does not match BEGIN PGM PART-1"]
+    );
+    let (_, warnings) = run_with_warnings("BEGIN PGM 17 MM\nL X+1 F100\nEND PGM\n");
+    assert_eq!(
+        warnings,
+        vec!["t.h:3:1: END PGM names no program (BEGIN PGM 17)"]
+    );
+    // the same name, also without the unit, is no news
+    let (_, warnings) = run_with_warnings("BEGIN PGM 17 MM\nEND PGM 17\n");
+    assert!(warnings.is_empty(), "{warnings:?}");
+}
+
+#[test]
+fn a_check_reports_the_warnings_apart_from_errors() {
+    let path = temp_file(
+        "lenient.h",
+        b"%LENIENT\nBEGIN PGM LENIENT MM\nL X+1 F100\nEND PGM OTHER MM\n",
+    );
+    let report = klar_interp::check_report(&path, Pose::ZERO);
+    assert!(report.errors.is_empty(), "{:?}", report.errors);
+    let shown: Vec<String> = report
+        .warnings
+        .iter()
+        .map(|d| format!("{}:{}: {}", d.line, d.col, d.message))
+        .collect();
+    assert_eq!(
+        shown,
+        vec![
+            "1:1: line 1 before BEGIN PGM ignored",
+            "4:9: END PGM OTHER does not match BEGIN PGM LENIENT"
+        ]
+    );
+    assert_eq!(report.warnings[0].file, path);
+    assert_eq!(klar_interp::syntax_check(&path), Ok(()));
+    remove_temp(&path);
+}
+
+#[test]
+fn a_missing_end_pgm_stays_an_error() {
+    let (ops, d) = run_until_error("BEGIN PGM T MM\nL X+1 F100\nL X+2\n");
+    assert_eq!(motions(&ops).len(), 2);
+    assert_eq!(d.to_string(), "t.h:4:1: END PGM missing at end of file");
 }

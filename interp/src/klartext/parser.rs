@@ -50,6 +50,9 @@ pub(crate) struct Parser {
     pub fk: super::fk::FkWords,
     /// Words of the last parsed PLANE block.
     pub plane: super::plane::PlaneWords,
+    /// Byte range of the program name in the last parsed BEGIN PGM or END PGM block (empty
+    /// when the block names none).
+    pub program_name: (usize, usize),
 }
 
 /// Upper-cases an identifier into a small stack buffer (longer ones are cut, which makes them
@@ -435,16 +438,21 @@ impl Parser {
         }
     }
 
-    /// Reads `name MM|INCH` after BEGIN/END PGM; returns true for INCH.
-    fn program_unit(&self, lx: &mut Lexer<'_>, at: usize, strict: bool) -> PResult<bool> {
+    /// Reads `name MM|INCH` after BEGIN/END PGM; returns true for INCH. The name's byte range
+    /// goes to [`Parser::program_name`].
+    fn program_unit(&mut self, lx: &mut Lexer<'_>, at: usize, strict: bool) -> PResult<bool> {
         let mut count = 0usize;
-        let mut last = None;
+        let mut last: Option<Token> = None;
+        let mut first = None;
+        let mut before_last = None;
         loop {
             let t = lx.next_token();
             if t.kind == TokKind::End {
                 break;
             }
             count += 1;
+            first.get_or_insert(t.start());
+            before_last = last.map(|l| l.end());
             last = Some(t);
         }
         let unit = last.and_then(|t| {
@@ -460,6 +468,12 @@ impl Parser {
                 None
             }
         });
+        let name_start = first.unwrap_or(at);
+        let name_end = match unit {
+            Some(_) => before_last.unwrap_or(name_start),
+            None => last.map_or(name_start, |t| t.end()),
+        };
+        self.program_name = (name_start, name_end.max(name_start));
         match unit {
             Some(inch) if count >= 2 || !strict => Ok(inch),
             Some(_) => Err((at, ProgramError::Missing("BEGIN PGM needs a program name"))),
@@ -550,6 +564,23 @@ fn template_placeholder(text: &[u8]) -> Option<(usize, String)> {
             .collect();
         (open, field)
     })
+}
+
+/// True when the block's keyword is BEGIN (`[nr] BEGIN …`), also when the rest of the block
+/// is wrong: text before BEGIN PGM is passed over, a broken BEGIN PGM is not.
+pub(crate) fn is_begin_block(text: &[u8]) -> bool {
+    let mut i = 0;
+    while text.get(i).is_some_and(|b| b.is_ascii_whitespace()) {
+        i += 1;
+    }
+    while text.get(i).is_some_and(u8::is_ascii_digit) {
+        i += 1;
+    }
+    while text.get(i).is_some_and(|b| b.is_ascii_whitespace()) {
+        i += 1;
+    }
+    text.get(i..i + 5)
+        .is_some_and(|w| w.eq_ignore_ascii_case(b"BEGIN"))
 }
 
 /// True when the block is only a comment (`[/][N]nr ; text`), which may run over several
