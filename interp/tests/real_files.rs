@@ -6,7 +6,7 @@
 mod common;
 use common::*;
 use klar_interp::{
-    AxisLetter, Feed, Interpreter, OpKind, Pose,
+    AxisLetter, Feed, Interpreter, OpKind, Pose, Tool, ToolTable,
     op::{SpindleDir, SpindleSpeed},
 };
 
@@ -350,4 +350,113 @@ fn a_missing_end_pgm_stays_an_error() {
     let (ops, d) = run_until_error("BEGIN PGM T MM\nL X+1 F100\nL X+2\n");
     assert_eq!(motions(&ops).len(), 2);
     assert_eq!(d.to_string(), "t.h:4:1: END PGM missing at end of file");
+}
+
+#[test]
+fn block_skip_slash_before_the_block_number() {
+    let text = program("/12 L X+10 F100\n13 L Y+5 F100\n/ 14 L Z+3");
+    assert_eq!(ends(&text), vec![Pose::xyz(0.0, 5.0, 0.0)]);
+    let mut it = Interpreter::from_source("t.h", &text, Pose::ZERO);
+    it.set_block_skip(false);
+    let ops: Vec<_> = it.map(|r| r.unwrap_or_else(|d| panic!("{d}"))).collect();
+    let got: Vec<(Option<u64>, Pose)> = ops
+        .iter()
+        .filter_map(|o| match o.kind {
+            OpKind::Line { to, .. } => Some((o.loc.block, to)),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(
+        got,
+        vec![
+            (Some(12), Pose::xyz(10.0, 0.0, 0.0)),
+            (Some(13), Pose::xyz(10.0, 5.0, 0.0)),
+            (Some(14), Pose::xyz(10.0, 5.0, 3.0)),
+        ]
+    );
+}
+
+#[test]
+fn f_max_with_a_blank_is_fmax() {
+    let feeds = |text: &str| -> Vec<Feed> {
+        motions(&run(&program(text)))
+            .iter()
+            .map(|k| match k {
+                OpKind::Line { feed, .. } => *feed,
+                other => panic!("{other:?}"),
+            })
+            .collect()
+    };
+    let spaced = feeds("L X+10 F300\nL Z+50 F MAX\nL X+20\nL Y+5 F  MAX M3");
+    assert_eq!(
+        spaced,
+        vec![Feed::Rate(5.0), Feed::Rapid, Feed::Rate(5.0), Feed::Rapid]
+    );
+    assert_eq!(
+        spaced,
+        feeds("L X+10 F300\nL Z+50 FMAX\nL X+20\nL Y+5 FMAX M3")
+    );
+}
+
+#[test]
+fn tabs_in_comments_and_between_words() {
+    let text = program(
+        "L X+10 F100 ;\tcomment\twith tabs\n\t;\tcomment line\t\t\n5\tL\tY+3\t;\tend ~\n\tsecond\tline\nL Z+1",
+    );
+    assert_eq!(
+        ends(&text),
+        vec![
+            Pose::xyz(10.0, 0.0, 0.0),
+            Pose::xyz(10.0, 3.0, 0.0),
+            Pose::xyz(10.0, 3.0, 1.0)
+        ]
+    );
+    // a tab counts as one column
+    let (_, d) = run_until_error(&program("L\tX+1\tF100\t;\tok\nL\tX+1\tQ\t;\tx"));
+    assert_eq!(d.to_string(), "t.h:3:7: unknown word 'Q' in L block");
+}
+
+#[test]
+fn tool_call_by_name() {
+    let ops = run(&program(
+        "TOOL CALL \"MILL_D10\" Z S3000 DL+0.1\nL X+1 F100 M3",
+    ));
+    match &ops[0].kind {
+        OpKind::ToolChange {
+            name, axis, length, ..
+        } => {
+            assert_eq!(name.as_deref(), Some("MILL_D10"));
+            assert_eq!(*axis, AxisLetter::Z);
+            close(*length, 0.1);
+        }
+        other => panic!("{other:?}"),
+    }
+    // with a tool table the name finds the tool
+    let mut table = ToolTable::new();
+    table.insert(Tool {
+        number: 7,
+        name: "MILL_D10".into(),
+        length: 80.0,
+        radius: 5.0,
+        ..Tool::default()
+    });
+    let text = program("TOOL CALL \"MILL_D10\" Z S3000\nL X+1 F100 M3");
+    let ops: Vec<_> = Interpreter::from_source("t.h", &text, Pose::ZERO)
+        .with_tools(table)
+        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
+        .collect();
+    match &ops[0].kind {
+        OpKind::ToolChange {
+            tool,
+            name,
+            length,
+            radius,
+            ..
+        } => {
+            assert_eq!((*tool, name.as_deref()), (7, Some("MILL_D10")));
+            close(*length, 80.0);
+            close(*radius, 5.0);
+        }
+        other => panic!("{other:?}"),
+    }
 }
