@@ -7,7 +7,12 @@
 //! Tolerated forms seen in real files: optional block number (also `N12`), `/` block skip
 //! before or after the number, spaces inside words, `R`/`F`/`M`/`REP` without a value (old
 //! exports: `R` alone is R0, an empty `F`, `M` or `REP` is ignored), `F MAX`, decimal commas,
-//! `* - text` headlines, `;` comments and `( … )` comment headers. Block types this version
+//! `* - text` headlines, `;` comments and `( … )` comment headers, `CYCL DEF9 .0` (number
+//! glued to DEF, blank before the sub-block: [`super::cycle`]). Continuations are joined by
+//! the block reader (`crate::source`): `~` also before a trailing comment, a comment ending in
+//! `~` goes on over the next line, and SPL coefficient lines join their SPL block; a K line
+//! anywhere else is an error here. Text before BEGIN PGM and an END PGM name that differs
+//! from BEGIN PGM are warnings of the interpreter, not parse errors. Block types this version
 //! does not run (the keyword `FK` alone, other FN numbers, …) are recognised by their keyword
 //! and reported as not supported when executed.
 
