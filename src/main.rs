@@ -213,6 +213,9 @@ fn cmd_check(program: &Path, machine: Option<&Path>, program_only: bool, quiet: 
             ..Default::default()
         },
     };
+    for w in &report.warnings {
+        eprintln!("{w} (warning)");
+    }
     for m in &report.missing {
         eprintln!("{m} (warning: a run stops here)");
     }

@@ -96,6 +96,8 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
         .collect();
     let mut report = TestRunReport {
         errors,
+        // what the program's text tolerates (lines before BEGIN PGM, another END PGM name)
+        warnings: checked.warnings.clone(),
         undecided: checked
             .undecided
             .iter()

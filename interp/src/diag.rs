@@ -46,9 +46,21 @@ impl Diagnostic {
         block: Option<u64>,
         error: &ProgramError,
     ) -> Self {
+        Self::with_message(file, line, col, block, error.to_string())
+    }
+
+    /// Builds a diagnostic (an error or a warning) from its message, prefixing the block
+    /// number when known.
+    pub(crate) fn with_message(
+        file: PathBuf,
+        line: u32,
+        col: u32,
+        block: Option<u64>,
+        message: String,
+    ) -> Self {
         let message = match block {
-            Some(n) => format!("block {n}: {error}"),
-            None => error.to_string(),
+            Some(n) => format!("block {n}: {message}"),
+            None => message,
         };
         Diagnostic {
             file,

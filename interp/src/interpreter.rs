@@ -9,10 +9,17 @@ use crate::diag::{Diagnostic, ProgramError};
 use crate::dialect::{Dialect, DialectRun, detect_dialect, runner};
 use crate::klartext::cycle_table::DatumTable;
 use crate::klartext::exec::{Blank, Flow, LabelKey, Machine};
-use crate::klartext::parser::{LabelRef, Parser, Stmt};
+use crate::klartext::parser::{Block, LabelRef, Parser, Stmt, is_begin_block};
 use crate::klartext::tools::ToolTable;
 use crate::op::{Op, Pose, SourceLoc};
 use crate::source::{BlockReader, BlockStart, ProgramInput};
+
+#[path = "interpreter_check.rs"]
+mod check;
+#[path = "interpreter_flow.rs"]
+mod flow;
+
+pub use check::{CheckReport, check, check_report, syntax_check};
 
 /// How much of each block is processed.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -77,6 +84,11 @@ struct Unit {
     calls: Vec<BlockStart>,
     /// Repeats left per section-repeat block (keyed by the block's byte offset).
     repeats: HashMap<u64, u32>,
+    /// Blocks before BEGIN PGM that were passed over: where the first starts (line,
+    /// column) and the last line they took.
+    ignored: Option<(u32, u32, u32)>,
+    /// The program name written in BEGIN PGM.
+    begin_name: Vec<u8>,
 }
 
 impl Unit {
@@ -84,12 +96,14 @@ impl Unit {
         Unit {
             path,
             file_id,
-            reader: BlockReader::new(input),
+            reader: BlockReader::klartext(input),
             phase: Phase::BeforeBegin,
             labels: HashMap::new(),
             seen_to: BlockStart { offset: 0, line: 1 },
             calls: Vec::new(),
             repeats: HashMap::new(),
+            ignored: None,
+            begin_name: Vec::new(),
         }
     }
 }
@@ -131,6 +145,8 @@ pub struct Interpreter {
     /// the operator set during a program stop, a called program or a table that is not
     /// there): what it says in words.
     depends_on: Option<String>,
+    /// Forms accepted with leniency (see [`Interpreter::warnings`]).
+    warnings: Vec<Diagnostic>,
 }
 
 impl std::fmt::Debug for Interpreter {
@@ -158,51 +174,6 @@ fn open_any(path: &Path) -> Result<(Dialect, Box<dyn ProgramInput>), Diagnostic>
     match detect_dialect(path, head) {
         Some(d) => Ok((d, Box::new(reader))),
         None => Err(whole_file_error(path, &ProgramError::UnknownDialect)),
-    }
-}
-
-/// Opens a Klartext file for reading, checking its dialect.
-fn open_klartext(path: &Path) -> Result<Box<dyn ProgramInput>, Diagnostic> {
-    let file =
-        File::open(path).map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
-    let mut reader = BufReader::with_capacity(64 * 1024, file);
-    let head = reader
-        .fill_buf()
-        .map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
-    let head = &head[..head.len().min(4096)];
-    match detect_dialect(path, head) {
-        Some(Dialect::Klartext) => Ok(Box::new(reader)),
-        Some(other) => Err(whole_file_error(
-            path,
-            &ProgramError::DialectNotSupported(other.name()),
-        )),
-        None => Err(whole_file_error(path, &ProgramError::UnknownDialect)),
-    }
-}
-
-/// The file a `CALL PGM` names, relative to the calling program's folder. A TNC drive prefix
-/// (`TNC:\`) and backslashes are accepted; without an extension `.h` is added.
-fn called_path(caller: &Path, written: &str) -> PathBuf {
-    let mut name = written.trim().replace('\\', "/");
-    if let Some(rest) = name
-        .strip_prefix("TNC:")
-        .or_else(|| name.strip_prefix("tnc:"))
-    {
-        name = rest.trim_start_matches('/').to_string();
-    }
-    let mut p = PathBuf::from(&name);
-    if p.extension().is_none() {
-        p.set_extension("h");
-    }
-    let dir = caller.parent().unwrap_or(Path::new(""));
-    let joined = dir.join(&p);
-    if joined.exists() {
-        return joined;
-    }
-    // a TNC path names folders of the control: try the file name next to the caller
-    match p.file_name() {
-        Some(f) => dir.join(f),
-        None => joined,
     }
 }
 
@@ -269,6 +240,7 @@ impl Interpreter {
             undecided: Vec::new(),
             missing: Vec::new(),
             depends_on: None,
+            warnings: Vec::new(),
         }
     }
 
@@ -415,6 +387,98 @@ impl Interpreter {
         }
     }
 
+    /// Warnings so far: forms that are accepted but not as HEIDENHAIN writes them, each
+    /// located as `file:line:col: message` like an error. Lines before `BEGIN PGM` are passed
+    /// over (one warning names them when BEGIN PGM comes), and an `END PGM` whose program name
+    /// differs from the one of `BEGIN PGM` is warned about. Each warning is kept once, at most
+    /// [`CHECK_DIAGNOSTIC_LIMIT`]; TNC ISO and lathe DIN programs have none.
+    pub fn warnings(&self) -> &[Diagnostic] {
+        &self.warnings
+    }
+
+    /// Records a warning (once; at most [`CHECK_DIAGNOSTIC_LIMIT`]).
+    fn warn(&mut self, d: Diagnostic) {
+        if self.warnings.len() < CHECK_DIAGNOSTIC_LIMIT && !self.warnings.contains(&d) {
+            self.warnings.push(d);
+        }
+    }
+
+    /// Passes over the current block, which stands before BEGIN PGM.
+    fn ignore_before_begin(&mut self) {
+        let Some(u) = self.units.last_mut() else {
+            return;
+        };
+        let text = u.reader.text();
+        let first = text
+            .iter()
+            .position(|b| !b.is_ascii_whitespace())
+            .unwrap_or(0);
+        let (line, col) = u.reader.position(first);
+        let (last, _) = u.reader.position(text.len());
+        match &mut u.ignored {
+            Some((_, _, l)) => *l = last,
+            None => u.ignored = Some((line, col, last)),
+        }
+    }
+
+    /// BEGIN PGM read: the warning about the lines passed over before it, and the name.
+    fn note_begin(&mut self) {
+        let Some(u) = self.units.last_mut() else {
+            return;
+        };
+        let (s, e) = self.parser.program_name;
+        u.begin_name = u.reader.text().get(s..e).unwrap_or(&[]).to_vec();
+        if let Some((line, col, last)) = u.ignored.take() {
+            let message = if last > line {
+                format!("lines {line} to {last} before BEGIN PGM ignored")
+            } else {
+                format!("line {line} before BEGIN PGM ignored")
+            };
+            let d = Diagnostic::with_message(u.path.clone(), line, col, None, message);
+            self.warn(d);
+        }
+    }
+
+    /// No BEGIN PGM before END PGM or the end of the text: the error stands where the
+    /// program should have begun (the first line passed over), else at `fallback`.
+    fn missing_begin(&mut self, fallback: Diagnostic) -> Diagnostic {
+        match self.units.last_mut().and_then(|u| u.ignored.take()) {
+            Some((line, col, _)) => Diagnostic {
+                line,
+                col,
+                block: None,
+                message: ProgramError::MissingBegin.to_string(),
+                ..fallback
+            },
+            None => fallback,
+        }
+    }
+
+    /// END PGM read: a warning when it names another program than BEGIN PGM.
+    fn check_end_name(&mut self, block: &Block) {
+        let Some(u) = self.units.last() else {
+            return;
+        };
+        let (s, e) = self.parser.program_name;
+        let name = u.reader.text().get(s..e).unwrap_or(&[]);
+        if name == u.begin_name.as_slice() {
+            return;
+        }
+        let begin = String::from_utf8_lossy(&u.begin_name);
+        let message = if name.is_empty() {
+            format!("END PGM names no program (BEGIN PGM {begin})")
+        } else {
+            format!(
+                "END PGM {} does not match BEGIN PGM {begin}",
+                String::from_utf8_lossy(name)
+            )
+        };
+        let at = if name.is_empty() { block.start } else { s };
+        let (line, col) = u.reader.position(at);
+        let d = Diagnostic::with_message(u.path.clone(), line, col, block.number, message);
+        self.warn(d);
+    }
+
     /// The program files in use: index = [`SourceLoc::file`] (0 = the main program).
     pub fn files(&self) -> &[PathBuf] {
         &self.files
@@ -444,247 +508,6 @@ impl Interpreter {
         }
     }
 
-    /// Records a label block read at `start` (the first definition counts).
-    fn note_label(&mut self, text_label: Option<LabelKey>, start: BlockStart) {
-        if let (Some(key), Some(u)) = (text_label, self.units.last_mut()) {
-            u.labels.entry(key).or_insert(start);
-        }
-    }
-
-    /// Marks the blocks up to the reader's position as read.
-    fn note_seen(&mut self) {
-        if let Some(u) = self.units.last_mut() {
-            let next = u.reader.next_start();
-            if next.offset > u.seen_to.offset {
-                u.seen_to = next;
-            }
-        }
-    }
-
-    /// Where a label's block starts; reads ahead from the furthest block read so far when
-    /// the label has not been seen yet.
-    fn find_label(&mut self, key: &LabelKey) -> Result<BlockStart, ProgramError> {
-        let missing = || ProgramError::NoLabel(key.to_string());
-        let Some(u) = self.units.last_mut() else {
-            return Err(missing());
-        };
-        if let Some(s) = u.labels.get(key) {
-            return Ok(*s);
-        }
-        let resume = u.reader.next_start();
-        let io = |e: std::io::Error| ProgramError::Io(e.to_string());
-        u.reader.seek(u.seen_to).map_err(io)?;
-        let mut found = None;
-        while let Some(start) = u.reader.next_block().map_err(io)? {
-            let next = u.reader.next_start();
-            if next.offset > u.seen_to.offset {
-                u.seen_to = next;
-            }
-            if let Ok(block) = self.parser.parse(u.reader.text())
-                && let Stmt::Label(r) = block.stmt
-            {
-                let k = LabelKey::from_ref(r, u.reader.text());
-                let hit = k == *key;
-                u.labels.entry(k).or_insert(start);
-                if hit {
-                    found = Some(start);
-                    break;
-                }
-            }
-        }
-        u.reader.seek(resume).map_err(io)?;
-        found.ok_or_else(missing)
-    }
-
-    /// Continues reading at a label.
-    fn jump(&mut self, key: &LabelKey, mode: Mode) -> Result<(), ProgramError> {
-        self.jumps += 1;
-        self.idle_jumps += 1;
-        if mode == Mode::Run && self.idle_jumps > RUN_IDLE_JUMP_LIMIT {
-            return Err(ProgramError::Nesting(format!(
-                "more than {RUN_IDLE_JUMP_LIMIT} jumps without any motion: endless loop"
-            )));
-        }
-        if mode == Mode::Check && self.jumps > CHECK_JUMP_LIMIT {
-            return Err(ProgramError::Nesting(format!(
-                "more than {CHECK_JUMP_LIMIT} jumps: the check stops here (endless loop?)"
-            )));
-        }
-        let target = self.find_label(key)?;
-        if let Some(u) = self.units.last_mut() {
-            u.reader
-                .seek(target)
-                .map_err(|e| ProgramError::Io(e.to_string()))?;
-        }
-        Ok(())
-    }
-
-    /// Acts on the control flow a block asked for.
-    fn follow(&mut self, flow: Flow, mode: Mode) -> Result<(), ProgramError> {
-        match flow {
-            Flow::Continue | Flow::End => Ok(()),
-            Flow::Goto(key) => self.jump(&key, mode),
-            Flow::Call { label, rep: None } => {
-                let depth: usize = self.units.iter().map(|u| u.calls.len()).sum();
-                if depth >= MAX_SUBPROGRAM_DEPTH {
-                    return Err(ProgramError::Nesting(format!(
-                        "CALL {label}: subprograms nested deeper than {MAX_SUBPROGRAM_DEPTH} levels"
-                    )));
-                }
-                let ret = match self.units.last() {
-                    Some(u) => u.reader.next_start(),
-                    None => return Ok(()),
-                };
-                self.jump(&label, mode)?;
-                if let Some(u) = self.units.last_mut() {
-                    u.calls.push(ret);
-                }
-                Ok(())
-            }
-            Flow::Call {
-                label,
-                rep: Some(count),
-            } => {
-                let at = self.current.offset;
-                let Some(u) = self.units.last_mut() else {
-                    return Ok(());
-                };
-                let left = u.repeats.entry(at).or_insert(count);
-                if *left == 0 {
-                    u.repeats.remove(&at);
-                    return Ok(());
-                }
-                *left -= 1;
-                self.jump(&label, mode)
-            }
-            Flow::CallPgm(written) => self.call_program(&written),
-            Flow::Contours(labels) => {
-                let collected = self.collect_contours(&labels);
-                self.machine.finish_contours(collected, &mut self.queue)
-            }
-        }
-    }
-
-    /// SL cycles: runs the contour subprograms of cycle 14 with the machine collecting their
-    /// lines and arcs instead of emitting them, then returns to the calling block.
-    fn collect_contours(&mut self, labels: &[LabelKey]) -> Result<(), ProgramError> {
-        let Some(resume) = self.units.last().map(|u| u.reader.next_start()) else {
-            return Ok(());
-        };
-        self.machine.begin_contours();
-        let mut result = Ok(());
-        for key in labels {
-            result = self.collect_contour(key);
-            if result.is_err() {
-                break;
-            }
-        }
-        if let Some(u) = self.units.last_mut() {
-            u.reader
-                .seek(resume)
-                .map_err(|e| ProgramError::Io(e.to_string()))?;
-        }
-        result
-    }
-
-    /// Runs one contour subprogram (from its LBL to LBL 0) into the machine's collector.
-    fn collect_contour(&mut self, key: &LabelKey) -> Result<(), ProgramError> {
-        let start = self.find_label(key)?;
-        let io = |e: std::io::Error| ProgramError::Io(e.to_string());
-        let mut scratch = VecDeque::new();
-        let Some(u) = self.units.last_mut() else {
-            return Ok(());
-        };
-        u.reader.seek(start).map_err(io)?;
-        let wrap = |line: u32, e: ProgramError| ProgramError::Contour {
-            label: key.to_string(),
-            line,
-            error: Box::new(e),
-        };
-        loop {
-            let Some(u) = self.units.last_mut() else {
-                return Ok(());
-            };
-            let Some(s) = u.reader.next_block().map_err(io)? else {
-                return Err(wrap(start.line, ProgramError::Missing("LBL 0 missing")));
-            };
-            let block = self
-                .parser
-                .parse(u.reader.text())
-                .map_err(|e| wrap(s.line, e.error))?;
-            match block.stmt {
-                Stmt::Label(LabelRef::Num(0)) | Stmt::EndPgm => break,
-                Stmt::Empty | Stmt::Label(_) => continue,
-                _ => {}
-            }
-            let (line, col) = u.reader.position(block.start);
-            let loc = SourceLoc {
-                file: u.file_id,
-                line,
-                col,
-                block: block.number,
-            };
-            let flow = self
-                .machine
-                .exec(
-                    &block.stmt,
-                    &self.parser,
-                    u.reader.text(),
-                    loc,
-                    &mut scratch,
-                )
-                .map_err(|(_, e)| wrap(line, e))?;
-            if flow != Flow::Continue {
-                return Err(wrap(
-                    line,
-                    ProgramError::Missing("no jumps, calls or program end in a contour subprogram"),
-                ));
-            }
-        }
-        self.machine
-            .end_contour(&key.to_string(), &mut scratch)
-            .map_err(|e| wrap(start.line, e))
-    }
-
-    /// CALL PGM: opens the called file and runs it until its END PGM.
-    fn call_program(&mut self, written: &str) -> Result<(), ProgramError> {
-        let Some(caller) = self.unit().map(|u| u.path.clone()) else {
-            return Ok(());
-        };
-        let path = called_path(&caller, written);
-        if self.units.len() > MAX_PROGRAM_DEPTH {
-            return Err(ProgramError::Nesting(format!(
-                "CALL PGM {written}: program calls nested deeper than {MAX_PROGRAM_DEPTH} levels"
-            )));
-        }
-        let canon = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
-        if self
-            .units
-            .iter()
-            .any(|u| std::fs::canonicalize(&u.path).unwrap_or_else(|_| u.path.clone()) == canon)
-        {
-            return Err(ProgramError::Nesting(format!(
-                "CALL PGM {written}: the program is already running (recursive call)"
-            )));
-        }
-        let input = open_klartext(&path).map_err(|d| {
-            ProgramError::CallPgm(format!("CALL PGM {}: {}", path.display(), d.message))
-        })?;
-        let id = match self.files.iter().position(|f| *f == path) {
-            Some(i) => i,
-            None => {
-                self.files.push(path.clone());
-                self.files.len() - 1
-            }
-        };
-        let id = u16::try_from(id)
-            .map_err(|_| ProgramError::Nesting("too many program files".into()))?;
-        tracing::debug!(file = %path.display(), "CALL PGM");
-        self.units.push(Unit::new(path, id, input));
-        self.machine.params.enter_program();
-        Ok(())
-    }
-
     /// Reads and processes one block. Ops go to the queue.
     fn step(&mut self, mode: Mode) -> Result<(), Diagnostic> {
         let Some(u) = self.units.last_mut() else {
@@ -701,7 +524,10 @@ impl Interpreter {
                     Phase::BeforeBegin => Some(ProgramError::MissingBegin),
                     _ => Some(ProgramError::MissingEnd),
                 };
-                let d = error.map(|e| self.diag_end(&e));
+                let mut d = error.map(|e| self.diag_end(&e));
+                if was == Phase::BeforeBegin {
+                    d = d.map(|d| self.missing_begin(d));
+                }
                 if self.units.len() > 1 && mode != Mode::Syntax && d.is_none() {
                     self.units.pop();
                     self.machine.params.leave_program();
@@ -724,6 +550,11 @@ impl Interpreter {
             Ok(b) => b,
             Err(pe) => {
                 if u.phase == Phase::BeforeBegin {
+                    if !is_begin_block(u.reader.text()) {
+                        // text before the program (a CAM header, a `%` line) is passed over
+                        self.ignore_before_begin();
+                        return Ok(());
+                    }
                     u.phase = Phase::Running;
                 }
                 return Err(self.diag_at(pe.pos, pe.number, &pe.error));
@@ -742,6 +573,13 @@ impl Interpreter {
         let Some(u) = self.units.last_mut() else {
             return Ok(());
         };
+        if matches!(block.stmt, Stmt::EndPgm) && matches!(u.phase, Phase::Running | Phase::Stopped)
+        {
+            self.check_end_name(&block);
+        }
+        let Some(u) = self.units.last_mut() else {
+            return Ok(());
+        };
         match (u.phase, &block.stmt) {
             (Phase::BeforeBegin, Stmt::BeginPgm { inch }) => {
                 if self.units.len() == 1 {
@@ -750,12 +588,19 @@ impl Interpreter {
                 if let Some(u) = self.units.last_mut() {
                     u.phase = Phase::Running;
                 }
+                self.note_begin();
                 self.blocks += 1;
                 return Ok(());
             }
-            (Phase::BeforeBegin, _) => {
+            (Phase::BeforeBegin, Stmt::EndPgm) => {
+                // END PGM without BEGIN PGM: no program at all
                 u.phase = Phase::Running;
-                return Err(self.diag_at(block.start, block.number, &ProgramError::MissingBegin));
+                let d = self.diag_at(block.start, block.number, &ProgramError::MissingBegin);
+                return Err(self.missing_begin(d));
+            }
+            (Phase::BeforeBegin, _) => {
+                self.ignore_before_begin();
+                return Ok(());
             }
             (Phase::Ended | Phase::Done, _) => {
                 return Err(self.diag_at(block.start, block.number, &ProgramError::AfterEnd));
@@ -881,41 +726,6 @@ impl Interpreter {
         self.machine.popped();
         Some(op)
     }
-
-    /// Runs to the end in `mode`, collecting every diagnostic.
-    fn run_all(&mut self, mode: Mode) -> Vec<Diagnostic> {
-        if let Some(o) = &mut self.other {
-            return o.check_all(mode == Mode::Syntax);
-        }
-        let mut diags = Vec::new();
-        while !self.done {
-            let r = self.step(mode);
-            if mode == Mode::Check && self.depends_on.is_none() && self.machine.operator_value {
-                self.depends_on = Some(format!(
-                    "the position read at line {} after a program stop",
-                    self.current.line
-                ));
-            }
-            if let Err(mut d) = r {
-                let jump_limit = d.message.contains("jumps: the check stops");
-                if let Some(why) = &self.depends_on {
-                    // values that depend on the machine are only known when the program runs
-                    d.message = format!("{} (depends on {why})", d.message);
-                    self.undecided.push(d);
-                    if self.undecided.len() >= CHECK_DIAGNOSTIC_LIMIT {
-                        break;
-                    }
-                    continue;
-                }
-                diags.push(d);
-                if diags.len() >= CHECK_DIAGNOSTIC_LIMIT || jump_limit {
-                    break;
-                }
-            }
-            while self.pop_ready().is_some() {}
-        }
-        diags
-    }
 }
 
 impl Iterator for Interpreter {
@@ -947,166 +757,6 @@ impl Iterator for Interpreter {
                 self.machine.release();
                 self.pending_error = Some(d);
             }
-        }
-    }
-}
-
-/// Checks a program's syntax in one streaming pass without executing it (constant memory).
-///
-/// Reports every syntax error: unknown or misplaced words, missing values, a missing BEGIN PGM
-/// or END PGM, blocks after END PGM.
-pub fn syntax_check(path: &Path) -> Result<(), Vec<Diagnostic>> {
-    let mut it = Interpreter::open(path, Pose::ZERO).map_err(|d| vec![d])?;
-    let diags = it.run_all(Mode::Syntax);
-    if diags.is_empty() { Ok(()) } else { Err(diags) }
-}
-
-/// Checks syntax and runs the program without motion, reporting all errors (geometry and
-/// runtime errors included); a block with an error is skipped and the run goes on.
-///
-/// Files the program reads that are not there (a called program, a table) count as errors
-/// here; [`check_report`] tells them apart.
-pub fn check(path: &Path, start: Pose) -> Vec<Diagnostic> {
-    let r = check_report(path, start);
-    let mut all = r.errors;
-    all.extend(r.missing);
-    all.sort_by_key(|d| d.line);
-    all
-}
-
-/// What a check run found: errors, and what cannot be decided before the program runs.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct CheckReport {
-    /// Errors: the program is refused.
-    pub errors: Vec<Diagnostic>,
-    /// Files the program reads that are not beside it (a called program, a table): the
-    /// check of this file goes on past them, a run stops there. A test run against a machine
-    /// refuses them.
-    pub missing: Vec<Diagnostic>,
-    /// Problems that depend on what happens at the machine: errors that follow from positions
-    /// read (FN 18 ID240/ID270) after a program stop, where the operator may have moved the
-    /// axes, or from a missing file's data.
-    pub undecided: Vec<Diagnostic>,
-}
-
-/// [`check`] with what it could not decide before the run.
-pub fn check_report(path: &Path, start: Pose) -> CheckReport {
-    match Interpreter::open(path, start) {
-        Ok(it) => it.check_report(),
-        Err(d) => CheckReport {
-            errors: vec![d],
-            ..CheckReport::default()
-        },
-    }
-}
-
-impl Interpreter {
-    /// Runs the whole program as a check (no file is written; every error is reported, a
-    /// block with an error is skipped) with this interpreter's tools and machine settings.
-    pub fn check_report(mut self) -> CheckReport {
-        self.set_dry_run(true);
-        // A check keeps no coordinates: compensation in a tilted plane is allowed as in a run.
-        self.set_working_plane_ops(true);
-        let errors = fold_repeats(self.run_all(Mode::Check));
-        CheckReport {
-            errors,
-            missing: std::mem::take(&mut self.missing),
-            undecided: std::mem::take(&mut self.undecided),
-        }
-    }
-}
-
-/// One error and its consequences are one diagnostic: a run of errors with the same message
-/// in the same file (every block after a missing feed, say) becomes the first of them, which
-/// names the lines of the others.
-fn fold_repeats(errors: Vec<Diagnostic>) -> Vec<Diagnostic> {
-    /// The message without its `block N: ` prefix.
-    fn without_block(m: &str) -> &str {
-        match m.strip_prefix("block ").and_then(|r| r.split_once(": ")) {
-            Some((n, rest)) if n.bytes().all(|b| b.is_ascii_digit()) => rest,
-            _ => m,
-        }
-    }
-    let mut out: Vec<(Diagnostic, Vec<u32>)> = Vec::with_capacity(errors.len());
-    for d in errors {
-        match out.last_mut() {
-            Some((first, more))
-                if without_block(&first.message) == without_block(&d.message)
-                    && first.file == d.file =>
-            {
-                more.push(d.line);
-            }
-            _ => out.push((d, Vec::new())),
-        }
-    }
-    out.into_iter()
-        .map(|(mut d, more)| {
-            match more.as_slice() {
-                [] => {}
-                [one] => d.message = format!("{} (also line {one})", d.message),
-                [first, .., last] if more.len() > 3 => {
-                    d.message = format!(
-                        "{} (also {} more lines, {first} to {last})",
-                        d.message,
-                        more.len()
-                    )
-                }
-                lines => {
-                    let list: Vec<String> = lines.iter().map(u32::to_string).collect();
-                    d.message = format!("{} (also lines {})", d.message, list.join(", "));
-                }
-            }
-            d
-        })
-        .collect()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use proptest::prelude::*;
-
-    #[test]
-    fn repeated_consequences_are_one_diagnostic() {
-        let text = "BEGIN PGM F MM\nL X+0 Y+0 Z+50 R0 FMAX\nL X+10\nL X+20\nL X+30\n\
-                    L Y+5 F100\nL X+10 Y+10 Z+10 Q\nEND PGM F MM\n";
-        let report = Interpreter::from_source("f.h", text, Pose::ZERO).check_report();
-        let lines: Vec<u32> = report.errors.iter().map(|d| d.line).collect();
-        assert_eq!(lines.first(), Some(&3), "{:?}", report.errors);
-        let first = &report.errors[0].message;
-        assert!(first.ends_with("(also lines 4, 5)"), "{first}");
-        // a different error later is still reported on its own
-        assert_eq!(lines.len(), 2, "{:?}", report.errors);
-    }
-
-    fn run_bytes(bytes: Vec<u8>, mode: Mode) -> usize {
-        let mut it = Interpreter::with_input(
-            PathBuf::from("fuzz.h"),
-            Box::new(Cursor::new(bytes)),
-            Pose::ZERO,
-        );
-        match mode {
-            Mode::Run => it.by_ref().take(10_000).count(),
-            other => it.run_all(other).len(),
-        }
-    }
-
-    proptest! {
-        #[test]
-        fn random_bytes_never_panic(bytes in proptest::collection::vec(any::<u8>(), 0..400)) {
-            run_bytes(bytes.clone(), Mode::Run);
-            run_bytes(bytes.clone(), Mode::Check);
-            run_bytes(bytes, Mode::Syntax);
-        }
-
-        #[test]
-        fn random_blocks_after_begin_never_panic(
-            body in proptest::collection::vec(any::<u8>(), 0..300)
-        ) {
-            let mut bytes = b"BEGIN PGM F MM\nCC X+0 Y+0\nL X+5 F100\n".to_vec();
-            bytes.extend_from_slice(&body);
-            run_bytes(bytes.clone(), Mode::Run);
-            run_bytes(bytes, Mode::Check);
         }
     }
 }

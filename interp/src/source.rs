@@ -3,9 +3,15 @@
 //! A block is one physical line, or several when a line ends in `~` (continuation). Line ends
 //! may be LF or CRLF; the last line needs no line end. The joined block text keeps the raw
 //! bytes (the `~` becomes a space, physical lines are joined with `\n`), so a `;` comment ends
-//! at the end of its physical line. Bytes are never decoded up front: columns are computed on
-//! demand, counting UTF-8 characters when the physical line is valid UTF-8 and bytes (latin-1)
-//! otherwise. Only the current block is held in memory; each block remembers the byte offset
+//! at the end of its physical line.
+//!
+//! Klartext readers ([`BlockReader::klartext`]) know the `;` comment: a `~` before a trailing
+//! comment (`CYCL DEF 200 BOHREN ~ ;note`) continues the block too, and a `~` at the end of a
+//! comment is kept in the text, where it tells the lexer that the comment goes on over the
+//! next line (a control wraps long comments that way).
+//!
+//! Bytes are never decoded up front: columns are computed on demand, counting UTF-8
+//! characters when the physical line is valid UTF-8 and bytes (latin-1) otherwise. Only the current block is held in memory; each block remembers the byte offset
 //! and line of its first physical line so that a later jump can seek back to it.
 
 use std::io::{self, BufRead, Seek, SeekFrom};
@@ -41,6 +47,12 @@ pub(crate) struct BlockReader {
     next_offset: u64,
     /// Line and column just after the last byte read (for "missing at end of file").
     end_pos: (u32, u32),
+    /// Klartext: `;` starts a comment (see the module notes).
+    klartext: bool,
+    /// A line read ahead (to see whether it continues an SPL block) and not used yet.
+    held: Vec<u8>,
+    /// True when `held` holds such a line.
+    held_ready: bool,
 }
 
 impl BlockReader {
@@ -53,6 +65,18 @@ impl BlockReader {
             next_line: 1,
             next_offset: 0,
             end_pos: (1, 1),
+            klartext: false,
+            held: Vec::new(),
+            held_ready: false,
+        }
+    }
+
+    /// Wraps a Klartext source positioned at its start: `~` continuations know `;` comments
+    /// (see the module notes).
+    pub fn klartext(input: Box<dyn ProgramInput>) -> Self {
+        BlockReader {
+            klartext: true,
+            ..BlockReader::new(input)
         }
     }
 
@@ -75,12 +99,14 @@ impl BlockReader {
             line: self.next_line,
         };
         let mut any = false;
+        // the line read continues a comment (the one before ended in a comment and `~`)
+        let mut in_comment = false;
         loop {
             if !self.buf.is_empty() {
                 self.buf.push(b'\n');
             }
             let seg_start = self.buf.len();
-            let n = self.input.read_until(b'\n', &mut self.buf)?;
+            let n = self.read_line()?;
             if n == 0 {
                 // nothing more: drop the separator pushed for a continuation
                 self.buf
@@ -110,20 +136,47 @@ impl BlockReader {
                 start: seg_start,
                 line: line_no,
             });
-            let trimmed = body
-                .iter()
-                .rposition(|b| !b.is_ascii_whitespace())
-                .map(|p| seg_start + p);
-            match trimmed {
-                Some(i) if self.buf.get(i) == Some(&b'~') => {
-                    if let Some(b) = self.buf.get_mut(i) {
+            match continuation(body, self.klartext, in_comment) {
+                Some(Tilde::Code(i)) => {
+                    in_comment = false;
+                    if let Some(b) = self.buf.get_mut(seg_start + i) {
                         *b = b' ';
                     }
                 }
-                _ => break,
+                Some(Tilde::Comment) => in_comment = true,
+                None if self.klartext && self.spline_goes_on()? => in_comment = false,
+                None => break,
             }
         }
         Ok(if any { Some(start) } else { None })
+    }
+
+    /// Appends the next physical line (the one read ahead, if any) to the block buffer;
+    /// returns its length in bytes, 0 at the end of the input.
+    fn read_line(&mut self) -> io::Result<usize> {
+        if self.held_ready {
+            self.held_ready = false;
+            self.buf.extend_from_slice(&self.held);
+            return Ok(self.held.len());
+        }
+        self.input.read_until(b'\n', &mut self.buf)
+    }
+
+    /// True when the block read so far is an SPL block and the next line starts with a
+    /// spline coefficient (`K3X…`): the manual prints an SPL block that way, its coefficient
+    /// lines without block number or `~`. The next line is read ahead and kept.
+    fn spline_goes_on(&mut self) -> io::Result<bool> {
+        if !is_spline_block(&self.buf) {
+            return Ok(false);
+        }
+        if !self.held_ready {
+            self.held.clear();
+            if self.input.read_until(b'\n', &mut self.held)? == 0 {
+                return Ok(false);
+            }
+            self.held_ready = true;
+        }
+        Ok(starts_with_coefficient(&self.held))
     }
 
     /// Line and column (1-based, in characters) of a byte position in the current block.
@@ -167,11 +220,103 @@ impl BlockReader {
 
     /// Moves the reader so that the next block read starts at `start` (for jumps).
     pub fn seek(&mut self, start: BlockStart) -> io::Result<()> {
+        self.held_ready = false;
         self.input.seek(SeekFrom::Start(start.offset))?;
         self.next_offset = start.offset;
         self.next_line = start.line;
         Ok(())
     }
+}
+
+/// A `~` that continues a block on the next line.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Tilde {
+    /// In the code of the line, at this byte: it becomes a blank.
+    Code(usize),
+    /// At the end of a Klartext comment: it stays in the text for the lexer.
+    Comment,
+}
+
+/// Whether a physical line continues on the next one: its last non-blank byte is `~`, or (in
+/// Klartext) the last non-blank byte before a trailing `;` comment is. `in_comment`: the whole
+/// line is the continuation of a comment.
+fn continuation(line: &[u8], klartext: bool, in_comment: bool) -> Option<Tilde> {
+    let last = |s: &[u8]| s.iter().rposition(|b| !b.is_ascii_whitespace());
+    let end = last(line)?;
+    let code_end = match (klartext, in_comment) {
+        (false, _) => None,
+        (true, true) => Some(0),
+        (true, false) => comment_start(line),
+    };
+    match code_end {
+        Some(c) => match last(line.get(..c).unwrap_or(&[])) {
+            Some(i) if line.get(i) == Some(&b'~') => Some(Tilde::Code(i)),
+            _ if line.get(end) == Some(&b'~') => Some(Tilde::Comment),
+            _ => None,
+        },
+        None if line.get(end) == Some(&b'~') => Some(Tilde::Code(end)),
+        None => None,
+    }
+}
+
+/// True for a Klartext block whose keyword is `SPL` (`[/][N]nr[/] SPL …`).
+fn is_spline_block(text: &[u8]) -> bool {
+    let mut i = 0;
+    let blanks = |i: &mut usize| {
+        while matches!(text.get(*i), Some(b' ' | b'\t')) {
+            *i += 1;
+        }
+    };
+    blanks(&mut i);
+    if text.get(i) == Some(&b'/') {
+        i += 1;
+        blanks(&mut i);
+    }
+    if text.get(i).is_some_and(|b| b.eq_ignore_ascii_case(&b'N'))
+        && text.get(i + 1).is_some_and(u8::is_ascii_digit)
+    {
+        i += 1;
+    }
+    while text.get(i).is_some_and(u8::is_ascii_digit) {
+        i += 1;
+    }
+    blanks(&mut i);
+    if text.get(i) == Some(&b'/') {
+        i += 1;
+        blanks(&mut i);
+    }
+    text.get(i..i + 3)
+        .is_some_and(|w| w.eq_ignore_ascii_case(b"SPL"))
+        && !text
+            .get(i + 3)
+            .is_some_and(|b| b.is_ascii_alphanumeric() || *b == b'_')
+}
+
+/// True for a line that starts (after blanks) with a spline coefficient word `K3X`, `K2Y`,
+/// `K1A`, … .
+fn starts_with_coefficient(line: &[u8]) -> bool {
+    let i = line
+        .iter()
+        .position(|b| !matches!(b, b' ' | b'\t'))
+        .unwrap_or(line.len());
+    matches!(
+        line.get(i..i + 3),
+        Some([k, b'1'..=b'3', axis])
+            if k.eq_ignore_ascii_case(&b'K') && b"XYZABCUVW".contains(&axis.to_ascii_uppercase())
+    )
+}
+
+/// Where the `;` comment of a Klartext line starts (a `;` inside `"…"` is text).
+fn comment_start(line: &[u8]) -> Option<usize> {
+    let mut quoted = false;
+    for (i, &b) in line.iter().enumerate() {
+        match b {
+            b'"' => quoted = !quoted,
+            b';' if !quoted => return Some(i),
+            _ => {}
+        }
+    }
+    None
 }
 
 /// Characters in a UTF-8 byte slice, counting latin-1 bytes as one each when invalid.
@@ -212,6 +357,68 @@ mod tests {
         assert_eq!(r.text(), b"2 L X+1");
         assert_eq!(r.end_position(), (3, 8));
         assert!(r.next_block().unwrap().is_none());
+    }
+
+    #[test]
+    fn klartext_comments_and_tildes() {
+        let mut r = BlockReader::klartext(Box::new(Cursor::new(
+            b"1 CYCL DEF 200 X ~ ;note\n Q200=2 ;A ~\n Q201=3\n2 L ; a ~ b\n3 QS1 = \"a;~\" ~\n + \"b\"\n".to_vec(),
+        )));
+        r.next_block().unwrap();
+        // the `~` before the comment continues the block and becomes a blank; the one at
+        // the end of a comment stays for the lexer
+        assert_eq!(r.text(), b"1 CYCL DEF 200 X   ;note\n Q200=2 ;A ~\n Q201=3");
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"2 L ; a ~ b");
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"3 QS1 = \"a;~\"  \n + \"b\"");
+        // other dialects know no `;` comment: only a final `~` continues
+        let mut r = reader(b"N10 G01 ~ ;x\nN20\n");
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"N10 G01 ~ ;x");
+    }
+
+    #[test]
+    fn spline_coefficient_lines_join_the_spl_block() {
+        let text = b"7 SPL X+1 Y+2\n K3X+0 K2X+0 K1X+1\nK3Y+0 K2Y+0 K1Y+2 F100\n8 L X+0\nK3X+1\n";
+        let mut r = BlockReader::klartext(Box::new(Cursor::new(text.to_vec())));
+        let b = r.next_block().unwrap().unwrap();
+        assert_eq!(b, BlockStart { offset: 0, line: 1 });
+        assert_eq!(
+            r.text(),
+            b"7 SPL X+1 Y+2\n K3X+0 K2X+0 K1X+1\nK3Y+0 K2Y+0 K1Y+2 F100"
+        );
+        let k = r.text().iter().rposition(|&c| c == b'K').unwrap();
+        assert_eq!(r.position(k), (3, 13));
+        // the line read ahead starts the next block, at its own offset and line
+        assert_eq!(
+            r.next_start(),
+            BlockStart {
+                offset: 56,
+                line: 4
+            }
+        );
+        let b = r.next_block().unwrap().unwrap();
+        assert_eq!(
+            b,
+            BlockStart {
+                offset: 56,
+                line: 4
+            }
+        );
+        assert_eq!(r.text(), b"8 L X+0");
+        // after any other block a K line stays a block of its own
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"K3X+1");
+        assert!(r.next_block().unwrap().is_none());
+        // a seek drops the line read ahead
+        let mut r = BlockReader::klartext(Box::new(Cursor::new(b"SPL X+1\nL X+2\n".to_vec())));
+        r.next_block().unwrap();
+        r.seek(BlockStart { offset: 0, line: 1 }).unwrap();
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"SPL X+1");
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"L X+2");
     }
 
     #[test]

@@ -123,9 +123,10 @@ fn tolerated_forms_of_real_files() {
 
 #[test]
 fn continued_comment_blocks_and_cycle_parameter_comments() {
-    // a comment block may run over `~` lines; a comment after words ends with its line
+    // a comment block may run over `~` lines; so does a comment after words (a control wraps
+    // long blocks that way): the line after a comment that ends in `~` is comment text
     let text = program(
-        "; licence text that goes on ~\n  WITHOUT ANY WARRANTY ~\n  and more\nQ1 = 2 ; first ~\n  + 3 ; second\nL X+Q1 F100",
+        "; licence text that goes on ~\n  WITHOUT ANY WARRANTY ~\n  and more\nQ1 = 2 + ~\n  3 ; first ~\n  + 4 ; still the comment\nL X+Q1 F100",
     );
     let m = motions(&run(&text));
     assert_eq!(line(&m[0]).1, Pose::xyz(5.0, 0.0, 0.0));

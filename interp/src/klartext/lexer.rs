@@ -3,7 +3,8 @@
 //! Tokens borrow nothing and allocate nothing: identifiers are byte ranges into the block,
 //! numbers are converted on the spot. Whitespace (also inside words, `L Z + Q13`) separates
 //! tokens and is otherwise ignored; `;` starts a comment that runs to the end of the physical
-//! line. Numbers accept `.` or `,` as decimal separator (old exports write `X+49,000`).
+//! line, or further when the line ends in `~` (the block reader keeps a `~` that ends a comment:
+//! the comment goes on over the next line; a `~` elsewhere in a comment is text). Numbers accept `.` or `,` as decimal separator (old exports write `X+49,000`).
 
 /// What a token is.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -236,12 +237,7 @@ impl<'a> Lexer<'a> {
     fn skip_blank(&mut self) {
         while let Some(&b) = self.text.get(self.pos) {
             if b == b';' {
-                while let Some(&c) = self.text.get(self.pos) {
-                    if c == b'\n' {
-                        break;
-                    }
-                    self.pos += 1;
-                }
+                self.pos = comment_end(self.text, self.pos);
             } else if b.is_ascii_whitespace() || b == 0 {
                 self.pos += 1;
             } else {
@@ -331,6 +327,27 @@ pub(crate) struct PlainWord {
     pub param: bool,
     /// One past the word.
     pub end: usize,
+}
+
+/// End of the `;` comment that starts at `from`: the end of its physical line, or of a later
+/// one while the comment's line ends in `~` (its last non-blank byte).
+pub(crate) fn comment_end(text: &[u8], from: usize) -> usize {
+    let mut i = from;
+    loop {
+        let rest = text.get(i..).unwrap_or(&[]);
+        let line_end = rest
+            .iter()
+            .position(|&b| b == b'\n')
+            .map_or(text.len(), |p| i + p);
+        let wrapped = text
+            .get(i..line_end)
+            .and_then(|l| l.iter().rev().find(|b| !b.is_ascii_whitespace()))
+            == Some(&b'~');
+        if !wrapped || line_end >= text.len() {
+            return line_end;
+        }
+        i = line_end + 1;
+    }
 }
 
 /// End of the run of digits at `start`.

@@ -1,6 +1,7 @@
 //! TNC conversational (Klartext) programs: lexer, parser, executor, contour geometry,
 //! program structure (labels, calls, jumps), system data and the tool table.
 
+pub(crate) mod block;
 pub(crate) mod contour;
 pub(crate) mod cycle;
 pub(crate) mod cycle_exec;
