@@ -74,6 +74,9 @@ pub(crate) struct Words {
     pub paraxial: Option<(bool, u32)>,
     /// M140 retract distance: `Some(None)` for MB MAX.
     pub mb: Option<Option<Value>>,
+    /// The F written directly after M128: the feed of its compensating moves, with the word
+    /// position.
+    pub m128_feed: Option<(Value, u32)>,
 }
 
 impl Words {
@@ -100,6 +103,7 @@ impl Words {
         self.cca = None;
         self.paraxial = None;
         self.mb = None;
+        self.m128_feed = None;
     }
 
     /// Stores an axis word.
@@ -303,6 +307,8 @@ pub(crate) enum Stmt {
     Tcpm {
         /// True for FUNCTION TCPM.
         on: bool,
+        /// Its feed, angle and interpolation modes (defaults for FUNCTION RESET TCPM).
+        mode: super::tcpm::TcpmMode,
     },
     /// A block type recognised but not implemented yet.
     Unsupported {
@@ -773,7 +779,7 @@ impl Parser {
             b"FSELECT" => self.fk_block(lx, super::fk::FkKind::Select),
             b"FK" => unsupported("FK free contour programming"),
             b"PLANE" => super::plane::parse_plane(self, lx, t.start()),
-            b"FUNCTION" => super::plane::parse_function(lx),
+            b"FUNCTION" => super::tcpm::parse_function(lx),
             b"TCH" => unsupported("TCH PROBE"),
             b"DECLARE" => self.declare(lx),
             b"SEL" => unsupported("SEL"),
