@@ -162,3 +162,19 @@ fn m128_f_keeps_the_compensating_moves_within_their_feed() {
     let free_rate = mid_rate(&free, "C", 0.0, 30.0);
     assert!(free_rate > 2.0 * rate, "{free_rate} vs {rate}");
 }
+
+#[test]
+fn the_example_program_runs_within_the_machine_limits() {
+    let machine = MachineConfig::builtin_mill5();
+    let (result, trace) = run(&common::program("m116_rotary_feed.h"), &machine);
+    if let Err(f) = result {
+        panic!("{}", f.error);
+    }
+    common::assert_within_limits(&trace, &machine);
+    // block 7: the quarter turn at 50 mm from C cruises at 90° per (25π mm / 1000 mm/min)
+    let rate = mid_rate(&trace, "C", 0.0, 90.0);
+    assert!(
+        (rate - 90.0 / ((PI / 2.0 * 50.0) / 1000.0 * 60.0)).abs() < 1e-6,
+        "{rate}"
+    );
+}
