@@ -425,7 +425,7 @@ impl Run<'_, '_> {
                 dir,
                 speed,
             } => self.spindle_command(op.loc, *dir, *speed),
-            OpKind::Tcpm { on } => {
+            OpKind::Tcpm { on, .. } => {
                 // From here on X Y Z of the samples are the tool tip on the workpiece (on) or
                 // the machine's own X Y Z (off).
                 self.kin.set_tcpm(*on);

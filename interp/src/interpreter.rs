@@ -292,7 +292,8 @@ impl Interpreter {
     /// machine's linear axes stand still and the tool tip ends on the point of the workpiece
     /// that the table has carried under it. Without it (or with another letter) TURN holds
     /// the tool tip on the workpiece like MOVE, since the tip's new place depends on the
-    /// pivots.
+    /// pivots. M116 measures the tool point's distance from these axes (a machine named
+    /// without them refuses M116 on blocks that turn a table axis).
     pub fn with_table_geometry(
         mut self,
         tilt: crate::op::AxisLetter,

@@ -218,7 +218,8 @@ pub enum CornerRule {
 /// M numbers klar itself gives a meaning to in Klartext and TNC ISO programs; a machine file
 /// cannot define them as machine functions.
 pub const BUILT_IN_M_NUMBERS: &[u32] = &[
-    0, 1, 2, 3, 4, 5, 6, 8, 9, 13, 14, 30, 89, 91, 92, 97, 98, 99, 126, 127, 128, 129, 140,
+    0, 1, 2, 3, 4, 5, 6, 8, 9, 13, 14, 30, 89, 91, 92, 97, 98, 99, 116, 117, 126, 127, 128, 129,
+    140,
 ];
 
 /// Highest M number a machine function may have.
@@ -500,6 +501,10 @@ pub enum OpKind {
     Tcpm {
         /// True for on.
         on: bool,
+        /// The feed (mm/s) the compensating moves of the linear machine axes keep within
+        /// while rotary axes turn (`M128 F…`); `None`: the machine's own limits.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        compensation_feed: Option<f64>,
     },
     /// The tilted working plane (PLANE, cycle 19) in effect for the following ops, which are
     /// then in the tilted system: a point `p` of them lies at `rotation · p` in the untilted

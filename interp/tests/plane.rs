@@ -145,7 +145,11 @@ fn points_of_the_tilted_plane_reach_the_workpiece_turned() {
         [0.0; 3],
     );
     // The plane switched the tool-tip transformation on.
-    assert!(ops.iter().any(|o| o.kind == OpKind::Tcpm { on: true }));
+    assert!(ops.iter().any(|o| o.kind
+        == OpKind::Tcpm {
+            on: true,
+            compensation_feed: None
+        }));
 }
 
 #[test]
@@ -204,7 +208,7 @@ fn move_turns_the_axes_with_the_tip_held_and_reset_turns_back() {
     let tcpm: Vec<bool> = kinds
         .iter()
         .filter_map(|k| match k {
-            OpKind::Tcpm { on } => Some(*on),
+            OpKind::Tcpm { on, .. } => Some(*on),
             _ => None,
         })
         .collect();
@@ -270,7 +274,7 @@ fn m128_and_function_tcpm_switch_the_transformation() {
     let tcpm: Vec<bool> = ops
         .iter()
         .filter_map(|o| match o.kind {
-            OpKind::Tcpm { on } => Some(on),
+            OpKind::Tcpm { on, .. } => Some(on),
             _ => None,
         })
         .collect();
@@ -279,7 +283,13 @@ fn m128_and_function_tcpm_switch_the_transformation() {
     let first = ops.iter().position(|o| o.kind.is_motion()).unwrap();
     let on = ops
         .iter()
-        .position(|o| o.kind == OpKind::Tcpm { on: true })
+        .position(|o| {
+            o.kind
+                == OpKind::Tcpm {
+                    on: true,
+                    compensation_feed: None,
+                }
+        })
         .unwrap();
     assert!(on < first);
 }

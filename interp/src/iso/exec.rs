@@ -153,6 +153,29 @@ pub(super) fn m_words(b: &IsoBlock, words: &mut Words) -> Result<usize, ExecErro
     Ok(n_m)
 }
 
+/// A value with the byte position of its word.
+type Placed = (Value, u32);
+
+/// The path feed F of a block and the F written directly after M128 (the feed of its
+/// compensating moves, as in Klartext), with its position; any other second F is refused.
+fn feed_words(b: &IsoBlock) -> Result<(Option<Value>, Option<Placed>), ExecError> {
+    let (mut feed, mut m128_feed) = (None, None);
+    let mut after_m128 = false;
+    for w in &b.words {
+        if letter(w) == Some(b'F') {
+            if after_m128 && m128_feed.is_none() {
+                m128_feed = Some((w.value, w.pos));
+            } else if feed.is_none() {
+                feed = Some(w.value);
+            } else {
+                return Err(err(w.pos, ProgramError::DuplicateWord("F".into())));
+            }
+        }
+        after_m128 = letter(w) == Some(b'M') && w.value == Value::Num(128.0);
+    }
+    Ok((feed, m128_feed))
+}
+
 impl IsoState {
     /// A fresh state on a machine standing at `start`.
     pub fn new(machine: Machine) -> Self {
@@ -544,10 +567,10 @@ impl IsoState {
         words.paraxial = paraxial;
         let n_m = m_words(b, &mut words)?;
         let find = |c: u8| b.words.iter().find(|w| letter(w) == Some(c));
+        let (feed, m128_feed) = feed_words(b)?;
+        words.m128_feed = m128_feed;
         // in a T block F is the tool's automatic feed (FAUTO), not a path feed
-        let feed = find(b'F')
-            .filter(|_| !tool_call)
-            .map(|w| FeedWord::Value(w.value));
+        let feed = feed.filter(|_| !tool_call).map(FeedWord::Value);
         let radius = find(b'R');
         let angle = find(b'H');
         let has_axes = words.axes.iter().any(Option::is_some);

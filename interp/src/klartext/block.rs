@@ -66,6 +66,9 @@ pub(crate) struct Words {
     pub paraxial: Option<(bool, u32)>,
     /// M140 retract distance: `Some(None)` for MB MAX.
     pub mb: Option<Option<Value>>,
+    /// The F written directly after M128: the feed of its compensating moves, with the word
+    /// position.
+    pub m128_feed: Option<(Value, u32)>,
 }
 
 impl Words {
@@ -92,6 +95,7 @@ impl Words {
         self.cca = None;
         self.paraxial = None;
         self.mb = None;
+        self.m128_feed = None;
     }
 
     /// Stores an axis word.
@@ -295,6 +299,8 @@ pub(crate) enum Stmt {
     Tcpm {
         /// True for FUNCTION TCPM.
         on: bool,
+        /// Its feed, angle and interpolation modes (defaults for FUNCTION RESET TCPM).
+        mode: super::tcpm::TcpmMode,
     },
     /// A block type recognised but not implemented yet.
     Unsupported {

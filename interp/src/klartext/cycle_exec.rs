@@ -684,7 +684,7 @@ impl Machine {
         let ms = MWords::classify(w)?;
         ms.modal(self);
         let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
-        ms.before(self, &mut emit);
+        ms.before(self, &mut emit)?;
         if kind == CallKind::Here
             && let Some(def) = &self.cyc.machining
             && is_sl_call(def.number)

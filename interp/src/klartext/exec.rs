@@ -489,7 +489,7 @@ impl Machine {
                 let stop = matches!(stmt, Stmt::Stop);
                 let ms = MWords::classify(w)?;
                 ms.modal(self);
-                ms.before(self, &mut emit);
+                ms.before(self, &mut emit)?;
                 ms.motion(self, w, &mut emit)?;
                 let flow = ms.after(self, stop, &mut emit);
                 Ok(flow)
@@ -501,16 +501,17 @@ impl Machine {
             Stmt::CycleDef { number: 19, sub } => self.cycle19(*sub, parsed, out, loc),
             Stmt::CycleDef { number, sub } => self.cycle_def(*number, *sub, parsed, out, loc),
             Stmt::Plane => self.plane_block(parsed, out, loc),
-            Stmt::Tcpm { on } => Ok(self.tcpm_block(*on, out, loc)),
+            Stmt::Tcpm { on, mode } => Ok(self.tcpm_block(*on, *mode, out, loc)),
             Stmt::CycleCall { kind } => self.cycle_call(*kind, parsed, out, loc),
             Stmt::PatternDef => self.pattern_def(parsed),
             Stmt::Fk(kind) => self.fk_exec(*kind, &parsed.fk, loc, out),
             Stmt::Spline => {
                 let ms = MWords::classify(w)?;
                 let op = self.spline(w, &parsed.spline)?;
-                ms.before(self, &mut emit);
+                ms.before(self, &mut emit)?;
+                let fed = self.rotary_feed(&op)?;
                 self.commit(&op);
-                emit(op);
+                emit(fed);
                 Ok(ms.after(self, false, &mut emit))
             }
             Stmt::ApproachDepart {
@@ -520,7 +521,7 @@ impl Machine {
             } => {
                 let ms = MWords::classify(w)?;
                 let op = self.approach_depart(w, *approach, *kind, *polar)?;
-                ms.before(self, &mut emit);
+                ms.before(self, &mut emit)?;
                 emit(op);
                 Ok(ms.after(self, false, &mut emit))
             }
@@ -587,7 +588,7 @@ impl Machine {
                     None => {
                         let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
                         if !plain {
-                            ms.before(self, &mut emit);
+                            ms.before(self, &mut emit)?;
                         }
                         if let Some(side) = w.comp
                             && side != self.comp
@@ -624,7 +625,7 @@ impl Machine {
     ) -> Result<Flow, ExecError> {
         let mut emit = |kind: OpKind| out.push_back(Op { kind, loc });
         if !plain {
-            ms.before(self, &mut emit);
+            ms.before(self, &mut emit)?;
         }
         if let Some(side) = w.comp
             && side != self.comp
@@ -632,9 +633,10 @@ impl Machine {
             self.comp = side;
             emit(OpKind::RadiusComp { side });
         }
+        let fed = self.rotary_feed(&m)?;
         self.commit(&m);
-        let contour = matches!(m, OpKind::Line { .. } | OpKind::Arc { .. });
-        out.push_back(Op { kind: m, loc });
+        let contour = matches!(fed, OpKind::Line { .. } | OpKind::Arc { .. });
+        out.push_back(Op { kind: fed, loc });
         if contour {
             self.held_at = Some(out.len() - 1);
         }
@@ -747,6 +749,7 @@ impl Machine {
     }
 
     pub(super) fn end_ops(&mut self, emit: &mut impl FnMut(OpKind)) {
+        self.tilt.m116 = false;
         self.spindle_coolant_off(emit);
         emit(OpKind::End);
     }

@@ -7,10 +7,13 @@
 //! Motion-related functions: M91 (the coordinates of this `L` block are machine coordinates,
 //! from the machine datum: no preset or datum transform acts on them) and M92 (from the
 //! machine builder's fixed position, which klar's machines put at the machine datum; see
-//! `Machine::machine_datum_target`). M126 makes absolute
-//! rotary moves take the shorter way (less than 180°), M127 switches that off again. M140
-//! retracts along the tool axis after the block's motion: `MB d` by d (rapid), `MB MAX` until
-//! a linear machine axis reaches its travel limit (see [`super::retract`]). M97 (small contour steps) and M98 (open contour
+//! `Machine::machine_datum_target`). M126 makes absolute rotary moves take the shorter way
+//! (less than 180°), M127 switches that off again. M116 makes F on rotary table axes the tool
+//! point's speed in mm/min from its own block on, M117 (or the program end) switches it off
+//! ([`super::rotary_feed`]). M128 switches TCPM on at block start, with the feed of its
+//! compensating moves when an F follows it, M129 off ([`super::tcpm`]). M140 retracts along
+//! the tool axis after the block's motion: `MB d` by d (rapid), `MB MAX` until a linear
+//! machine axis reaches its travel limit (see [`super::retract`]). M97 (small contour steps) and M98 (open contour
 //! corner) act on the corner at the end of their own block: they are passed on before the
 //! block's motion as [`OpKind::CornerRule`] for the radius compensation stage; M6 is
 //! accepted and does nothing (TOOL CALL changes the tool).
@@ -28,6 +31,7 @@
 //! and ends M89; M89 calls it after every positioning block from its own on (modal).
 
 use super::exec::{ExecError, Flow, Machine, at};
+use super::expr::Value;
 use super::parser::{MAX_M, Parser, Stmt, Words};
 use crate::diag::ProgramError;
 use crate::op::{CornerRule, Feed, MachineFunctionDef, MachineFunctionTime, OpKind, SpindleDir};
@@ -49,6 +53,10 @@ pub(super) struct MWords {
     cycle_call: bool,
     modal_call: Option<bool>,
     tcpm: Option<bool>,
+    /// The F written directly after M128 (feed of the compensating moves), with its position.
+    tcpm_feed: Option<(Value, u32)>,
+    /// M116 (true) / M117.
+    rotary_feed: Option<bool>,
     /// Machine functions in the order written (checked against the machine beforehand).
     machine: [u32; MAX_M],
     /// How many of `machine` are used.
@@ -80,6 +88,8 @@ impl MWords {
                 98 => m.corner = Some(CornerRule::Open),
                 6 | 91 | 92 => {}
                 126 | 127 => m.shortest = Some(num == 126),
+                // M116: F on rotary table axes in mm/min at the tool point; M117 ends it
+                116 | 117 => m.rotary_feed = Some(num == 116),
                 // M99: call the last defined cycle after this block's motion (and end M89);
                 // M89: call it after every positioning block from now on
                 99 => {
@@ -103,6 +113,7 @@ impl MWords {
                 }
             }
         }
+        m.tcpm_feed = w.m128_feed;
         Ok(m)
     }
 
@@ -127,20 +138,46 @@ impl MWords {
         }
     }
 
-    /// Modal switches that already apply to the block's own coordinates (M126/M127).
+    /// Modal switches that already apply to the block's own coordinates and feed (M126/M127,
+    /// M116/M117).
     pub(super) fn modal(&self, mc: &mut Machine) {
         if let Some(on) = self.shortest {
             mc.shortest_rotary = on;
+        }
+        if let Some(on) = self.rotary_feed {
+            mc.tilt.m116 = on;
         }
         if let Some(on) = self.modal_call {
             mc.cyc.modal_call = on;
         }
     }
 
-    /// Ops acting at block start.
-    pub(super) fn before(&self, mc: &mut Machine, emit: &mut impl FnMut(OpKind)) {
+    /// Ops acting at block start; refuses an M128 feed that is not a positive number.
+    pub(super) fn before(
+        &self,
+        mc: &mut Machine,
+        emit: &mut impl FnMut(OpKind),
+    ) -> Result<(), ExecError> {
+        if let Some(on) = self.rotary_feed {
+            mc.tilt.m116 = on;
+        }
         if let Some(on) = self.tcpm {
-            mc.set_m128(on, emit);
+            let feed = match self.tcpm_feed {
+                Some((v, pos)) => {
+                    let f = mc.params.value(v);
+                    if !(f > 0.0 && f.is_finite()) {
+                        return Err(at(
+                            pos,
+                            ProgramError::OutOfRange(format!(
+                                "feed rate F{f} after M128 must be positive"
+                            )),
+                        ));
+                    }
+                    Some(f * mc.feed_scale() / 60.0)
+                }
+                None => None,
+            };
+            mc.set_m128(on, feed, emit);
         }
         if let Some(rule) = self.corner {
             emit(OpKind::CornerRule { rule });
@@ -154,6 +191,7 @@ impl MWords {
             mc.coolant = true;
             emit(OpKind::Coolant { on: true });
         }
+        Ok(())
     }
 
     /// M140: the retract along the tool axis after the block's motion.

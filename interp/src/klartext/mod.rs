@@ -26,10 +26,12 @@ pub(crate) mod plane_math;
 pub(crate) mod plane_output;
 pub(crate) mod plane_turn;
 pub(crate) mod retract;
+pub(crate) mod rotary_feed;
 pub(crate) mod strings;
 pub(crate) mod structure;
 pub(crate) mod system;
 pub(crate) mod table;
+pub(crate) mod tcpm;
 #[cfg(test)]
 mod test_support;
 pub(crate) mod tools;

@@ -414,7 +414,7 @@ impl Parser {
             b"FSELECT" => self.fk_block(lx, super::fk::FkKind::Select),
             b"FK" => unsupported("FK free contour programming"),
             b"PLANE" => super::plane::parse_plane(self, lx, t.start()),
-            b"FUNCTION" => super::plane::parse_function(lx),
+            b"FUNCTION" => super::tcpm::parse_function(lx),
             b"TCH" => unsupported("TCH PROBE"),
             b"DECLARE" => self.declare(lx),
             b"SEL" => unsupported("SEL"),

@@ -309,36 +309,6 @@ fn check_words(w: &PlaneWords, at: usize) -> PResult<()> {
     Ok(())
 }
 
-/// Reads `FUNCTION TCPM …` / `FUNCTION RESET TCPM`; other FUNCTION blocks are reported as not
-/// supported.
-pub(super) fn parse_function(lx: &mut Lexer<'_>) -> PResult<Stmt> {
-    let t = lx.next_token();
-    let (u, n) = upper(lx.slice(t));
-    let on = match &u[..n] {
-        b"TCPM" => true,
-        b"RESET" => {
-            let t2 = lx.next_token();
-            if !lx.slice(t2).eq_ignore_ascii_case(b"TCPM") {
-                return Ok(Stmt::Unsupported {
-                    what: "FUNCTION RESET",
-                    number: None,
-                });
-            }
-            false
-        }
-        _ => {
-            return Ok(Stmt::Unsupported {
-                what: "FUNCTION",
-                number: None,
-            });
-        }
-    };
-    // F TCP / F CONT, AXIS POS / AXIS SPAT, PATHCTRL AXIS / VECTOR, REFPNT …: klar keeps the
-    // tool tip on the path whatever they say.
-    while lx.next_token().kind != TokKind::End {}
-    Ok(Stmt::Tcpm { on })
-}
-
 /// State of the working plane and of TCPM.
 #[derive(Debug)]
 pub(crate) struct PlaneState {
@@ -355,6 +325,14 @@ pub(crate) struct PlaneState {
     pub plane_tcpm: bool,
     /// The TCPM state last passed on.
     pub kin_on: bool,
+    /// The feed of M128's compensating moves (mm/s), while M128 is on.
+    pub m128_feed: Option<f64>,
+    /// The compensating-move feed last passed on.
+    pub kin_feed: Option<f64>,
+    /// How FUNCTION TCPM reads the feed and the rotary coordinates.
+    pub tcpm_mode: super::tcpm::TcpmMode,
+    /// M116: F on rotary table axes is the tool point's speed (see [`super::rotary_feed`]).
+    pub m116: bool,
     /// Ops at the front of the queue already tilted.
     pub pre: usize,
     /// Lines of a tilted arc still to hand out.
@@ -376,6 +354,10 @@ impl Default for PlaneState {
             m128: false,
             plane_tcpm: false,
             kin_on: false,
+            m128_feed: None,
+            kin_feed: None,
+            tcpm_mode: Default::default(),
+            m116: false,
             pre: 0,
             pending: VecDeque::new(),
             deferred: false,
@@ -422,29 +404,6 @@ impl Machine {
         Err(here(ProgramError::Plane(format!(
             "PLANE needs rotary axes A and C (or B and C); this machine has {what}"
         ))))
-    }
-
-    /// Passes the TCPM state on when it changed (after an exact stop).
-    pub(super) fn sync_tcpm(&mut self, emit: &mut impl FnMut(OpKind)) {
-        let want = self.tilt.m128 || self.tilt.plane_tcpm;
-        if want != self.tilt.kin_on {
-            self.tilt.kin_on = want;
-            // Switch at rest on the programmed point, not inside a blended corner.
-            emit(OpKind::ExactStop);
-            emit(OpKind::Tcpm { on: want });
-        }
-    }
-
-    /// M128 (`on`) / M129, and FUNCTION TCPM / FUNCTION RESET TCPM.
-    pub(super) fn set_m128(&mut self, on: bool, emit: &mut impl FnMut(OpKind)) {
-        self.tilt.m128 = on;
-        self.sync_tcpm(emit);
-    }
-
-    /// `FUNCTION TCPM` / `FUNCTION RESET TCPM` blocks.
-    pub(super) fn tcpm_block(&mut self, on: bool, out: &mut VecDeque<Op>, loc: SourceLoc) -> Flow {
-        self.set_m128(on, &mut |kind| out.push_back(Op { kind, loc }));
-        Flow::Continue
     }
 
     /// A PLANE block.

@@ -20,15 +20,21 @@ impl Parser {
     ) -> PResult<()> {
         let w = &mut self.words;
         w.clear();
+        // the previous word was M128 (an F right after it is the compensating moves' feed)
+        let mut after_m128 = false;
         loop {
             if lx.at_plain_end() {
                 return Ok(());
             }
+            let m_before = w.m_count;
+            let m128_here = std::mem::take(&mut after_m128);
             // fast path for the common plain forms `X+10`, `IY-Q2`, `F500`
             if let Some(pw) = lx.plain_word()
+                && !m128_here
                 && plain(w, lx.slice_range(pw.start, pw.name_end), &pw, allowed)
             {
                 lx.set_pos(pw.end);
+                after_m128 = w.m_count > m_before && w.m.get(usize::from(m_before)) == Some(&128);
                 continue;
             }
             let t = lx.next_token();
@@ -120,6 +126,11 @@ impl Parser {
                     });
                 }
                 b"R" => Self::r_word(w, val, allowed, t.start())?,
+                b"F" if m128_here && w.m128_feed.is_none() && matches!(val, Val::Some(_)) => {
+                    if let Val::Some(v) = val {
+                        w.m128_feed = Some((v, pos));
+                    }
+                }
                 b"F" | b"FMAX" | b"FAUTO" => {
                     if w.feed.is_some() {
                         return dup();
@@ -165,6 +176,7 @@ impl Parser {
                         w.m[i] = m as u32;
                         w.m_pos[i] = pos;
                         w.m_count += 1;
+                        after_m128 = m == 128.0;
                     }
                     _ => {
                         return Err((

@@ -156,6 +156,8 @@ pub struct Planner {
     finished: bool,
     /// True while TCPM is on.
     tcpm: bool,
+    /// The feed (mm/s) of the compensating moves while TCPM is on (`M128 F…`).
+    compensation_feed: Option<f64>,
     /// The table axes of a table-table machine, for the limits of turning moves with TCPM.
     table: Option<TableGeometry>,
 }
@@ -214,6 +216,7 @@ impl Planner {
             cycles: 0,
             finished: false,
             tcpm: false,
+            compensation_feed: None,
             table: None,
         })
     }
@@ -249,7 +252,7 @@ impl Planner {
         // A point of a curve lies within half its length of one of its ends.
         let spread = if straight { 0.0 } else { 0.5 * length };
         let d = table.reach(&[tip(offset), tip(offset + length)], spread);
-        tcpm::turning_limits(&self.base_limits, d)
+        tcpm::turning_limits(&self.base_limits, d, self.compensation_feed)
     }
 
     /// The configuration in use.
@@ -406,9 +409,13 @@ impl Planner {
                 });
                 return Ok(());
             }
-            OpKind::Tcpm { on } => {
+            OpKind::Tcpm {
+                on,
+                compensation_feed,
+            } => {
                 // The switch follows an exact stop: the moves after it get the new limits.
                 self.tcpm = *on;
+                self.compensation_feed = compensation_feed.filter(|_| *on);
                 self.config.limits = if *on {
                     tcpm::fixed_limits(&self.base_limits)
                 } else {

@@ -31,6 +31,12 @@
 //!
 //! `D` is computed per piece of the path from where its tip positions lie, so a tip near
 //! the table axis turns fast and one far from it slowly.
+//!
+//! *The feed of the compensating moves* (`M128 F…`, the op's `compensation_feed` `F_c`): the
+//! turning adds at most `ω·D` to the speed of the linear machine axes (the second term of
+//! the first bound), so `ω·D ≤ F_c` keeps the compensating moves within it; the limit is one
+//! more cap on `ω` next to `V/2` (a feed above the machine's share changes nothing, as on a
+//! control whose machine parameter caps the programmed value).
 
 use crate::config::AxisLimits;
 use crate::geom::letter;
@@ -122,8 +128,13 @@ pub fn fixed_limits(base: &[Option<AxisLimits>; 9]) -> [Option<AxisLimits>; 9] {
 }
 
 /// The limits for the program axes on a move that turns a rotary axis while TCPM is on, for
-/// tip positions within reach `d` (mm, see [`TableGeometry::reach`]).
-pub fn turning_limits(base: &[Option<AxisLimits>; 9], d: f64) -> [Option<AxisLimits>; 9] {
+/// tip positions within reach `d` (mm, see [`TableGeometry::reach`]), the turning's share of
+/// the linear machine axes' speed kept within `compensation_feed` (mm/s) when there is one.
+pub fn turning_limits(
+    base: &[Option<AxisLimits>; 9],
+    d: f64,
+    compensation_feed: Option<f64>,
+) -> [Option<AxisLimits>; 9] {
     let mut out = derate_linear(base, 0.5 * TCPM_DERATE);
     let Some(floor) = linear_floor(base) else {
         return out;
@@ -132,6 +143,10 @@ pub fn turning_limits(base: &[Option<AxisLimits>; 9], d: f64) -> [Option<AxisLim
     let d = d.max(1e-3);
     // ω·D ≤ V/2 and ω·V + ω²·D ≤ A/4.
     let mut omega = (0.5 * v / d).min((-v + (v * v + d * a).sqrt()) / (2.0 * d));
+    // ω·D ≤ F_c: the compensating moves within the feed M128 F gave them.
+    if let Some(fc) = compensation_feed.filter(|f| f.is_finite() && *f > 0.0) {
+        omega = omega.min(fc / d);
+    }
     let mut alpha = 0.25 * a / d;
     // Never more than the rotary axes can do together anyway.
     let deg = 180.0 / std::f64::consts::PI;
@@ -224,7 +239,7 @@ mod tests {
         // derated acceleration: the tip describes a circle of radius D in the machine.
         let base = mill5();
         for d in [1e-3, 10.0, 100.0, 500.0] {
-            let l = turning_limits(&base, d);
+            let l = turning_limits(&base, d, None);
             let rad = std::f64::consts::PI / 180.0;
             let c = l[5].expect("C");
             let a = l[3].expect("A");
@@ -247,6 +262,26 @@ mod tests {
             let x = l[0].expect("X");
             assert!((x.max_velocity - 50.0 / 3f64.sqrt()).abs() < 1e-9);
         }
+    }
+
+    #[test]
+    fn the_compensation_feed_caps_what_the_turning_adds_to_the_linear_axes() {
+        let base = mill5();
+        let rad = std::f64::consts::PI / 180.0;
+        let d = 150.0;
+        let free = turning_limits(&base, d, None);
+        // 500 mm/min = 8.33 mm/s: the rotary rates together give ω·D = 8.33 mm/s, shared
+        // equally by A and C
+        let capped = turning_limits(&base, d, Some(500.0 / 60.0));
+        let (a, c) = (capped[3].expect("A"), capped[5].expect("C"));
+        let omega = (a.max_velocity + c.max_velocity) * rad;
+        assert!((omega * d - 500.0 / 60.0).abs() < 1e-9, "{}", omega * d);
+        assert!((c.max_velocity - 0.5 * 500.0 / 60.0 / d / rad).abs() < 1e-9);
+        // the programmed tip keeps its share, acceleration and jerk stay as they were
+        assert_eq!(capped[0], free[0]);
+        assert!(c.max_acceleration <= free[5].expect("C").max_acceleration);
+        // a feed above the machine's own share changes nothing
+        assert_eq!(turning_limits(&base, d, Some(1e6)), free);
     }
 
     #[test]
