@@ -401,3 +401,69 @@ fn m91_positions_in_machine_coordinates_past_the_preset() {
     // the last block is back in program coordinates: Z10 is machine Z -10
     assert_eq!((cols[0][n], cols[1][n], cols[2][n]), (-250.0, 50.0, -10.0));
 }
+
+/// A five-axis job in the style of an NX post: FUNCTION RESET TCPM and PLANE RESET STAY at
+/// the top, an M91 retract, a tool called by name with a preselected next tool, PLANE
+/// SPATIAL … STAY SEQ- TABLE ROT positioned through Q120/Q122, `F MAX` with a blank, a
+/// skipped block, a string label, and PLANE RESET MOVE at the end.
+const NX_STYLE: &str = "0  BEGIN PGM NXPART MM\r
+1  ; NX POST - 5X TABLE-TABLE\r
+2  BLK FORM 0.1 Z X-60 Y-60 Z-40\r
+3  BLK FORM 0.2 X+60 Y+60 Z+0\r
+4  FUNCTION RESET TCPM\r
+5  PLANE RESET STAY\r
+6  L Z+250 R0 FMAX M91\r
+7  TOOL CALL \"EM_D10\" Z S8000 DL+0 DR+0\r
+8  TOOL DEF 12\r
+9  M3\r
+10 M8\r
+11 PLANE SPATIAL SPA+20 SPB+0 SPC+0 STAY SEQ- TABLE ROT\r
+12 L A+Q120 C+Q122 R0 FMAX\r
+13 L X+0 Y+0 R0 FMAX\r
+14 L Z+50 F MAX\r
+15 L Z+5 F2000\r
+16 L X+20 F800\r
+17 L Y+20\r
+18 /L X+0\r
+19 L Y+0\r
+20 L Z+50 FMAX\r
+21 LBL \"UP\"\r
+22 L Z+60 FMAX\r
+23 LBL 0\r
+24 CALL LBL \"UP\"\r
+25 PLANE RESET MOVE FMAX SEQ+\r
+26 L Z+250 R0 FMAX M91\r
+27 M9\r
+28 M5\r
+29 M30\r
+30 END PGM NXPART MM\r
+";
+
+#[test]
+fn an_nx_style_five_axis_job_runs_within_the_limits() {
+    let tools = "BEGIN TOOL.T MM\nT    NAME     L      R\n10   EM_D10   +60    +5\n\
+                 12   DRILL_6  +80    +3\n[END]\n";
+    let path = machine_dir(
+        "nx",
+        &format!("tool_table = \"TOOL.T\"\n{BUILTIN_MILL5}"),
+        &[("TOOL.T", tools)],
+    );
+    let machine = MachineConfig::load(&path).expect("mill5 with tools");
+    let program = temp_program("nx.h", NX_STYLE);
+    let report = test_run(&program, &machine);
+    assert!(report.passed(), "{:?}", report.errors);
+    let (result, trace) = run(&program, &machine);
+    result.expect("the NX-style job runs");
+    common::assert_within_limits(&trace, &machine);
+    let cols = commanded(&trace, &["X", "Y", "Z", "A", "C"]);
+    let n = cols[0].len() - 1;
+    // SEQ- tilts the table the negative way: A-20 (written to Q120 by the PLANE block)
+    let a_min = cols[3].iter().copied().fold(f64::INFINITY, f64::min);
+    assert!((a_min + 20.0).abs() < 1e-9, "A reached {a_min}");
+    // The skipped block 18 never sends X back to 0 while Y is at 20.
+    let back = (0..=n).any(|i| cols[0][i].abs() < 1e-6 && (cols[1][i] - 20.0).abs() < 1e-6);
+    assert!(!back, "block 18 (/L X+0) ran");
+    // PLANE RESET MOVE brings the table back; the M91 block ends at machine Z250.
+    assert!(cols[3][n].abs() < 1e-9 && cols[4][n].abs() < 1e-9);
+    assert!((cols[2][n] - 250.0).abs() < 1e-9, "Z {}", cols[2][n]);
+}
