@@ -505,6 +505,13 @@ pub enum OpKind {
         /// while rotary axes turn (`M128 F…`); `None`: the machine's own limits.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         compensation_feed: Option<f64>,
+        /// Where the path goes on from in the new frame: the pose the machine stands at,
+        /// re-expressed (the tool tip on the workpiece when TCPM switches on, the machine's
+        /// own X Y Z when it switches off; workpiece coordinates like every op leaving the
+        /// tilt stage). Nothing moves at the switch. `None` when the interpreter does not
+        /// know the machine's table geometry (the pose is then taken over unchanged).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        reframe: Option<Pose>,
     },
     /// The tilted working plane (PLANE, cycle 19) in effect for the following ops, which are
     /// then in the tilted system: a point `p` of them lies at `rotation · p` in the untilted

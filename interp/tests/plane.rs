@@ -145,11 +145,14 @@ fn points_of_the_tilted_plane_reach_the_workpiece_turned() {
         [0.0; 3],
     );
     // The plane switched the tool-tip transformation on.
-    assert!(ops.iter().any(|o| o.kind
-        == OpKind::Tcpm {
+    assert!(ops.iter().any(|o| matches!(
+        o.kind,
+        OpKind::Tcpm {
             on: true,
-            compensation_feed: None
-        }));
+            compensation_feed: None,
+            ..
+        }
+    )));
 }
 
 #[test]
@@ -284,11 +287,14 @@ fn m128_and_function_tcpm_switch_the_transformation() {
     let on = ops
         .iter()
         .position(|o| {
-            o.kind
-                == OpKind::Tcpm {
+            matches!(
+                o.kind,
+                OpKind::Tcpm {
                     on: true,
                     compensation_feed: None,
+                    ..
                 }
+            )
         })
         .unwrap();
     assert!(on < first);

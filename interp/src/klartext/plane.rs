@@ -551,13 +551,14 @@ impl Machine {
         let reset = pm::is_identity(&r, 0.0);
         let mut emitted = Vec::new();
         let mut emit = |kind: OpKind| emitted.push(kind);
-        // Where the tool is, in workpiece coordinates (machine values of the other axes).
-        let here_w = self.workpiece_pos();
-        let mut end_w = here_w;
         if !reset {
+            // TCPM on first: the position is re-expressed as the tool tip on the workpiece.
             self.tilt.plane_tcpm = true;
             self.sync_tcpm(&mut emit);
         }
+        // Where the tool is, in workpiece coordinates (machine values of the other axes).
+        let here_w = self.workpiece_pos();
+        let mut end_w = here_w;
         if let (Some((feed, how)), Some(t)) = (motion, tilt) {
             end_w[tilt_letter] = angles.0;
             end_w[AxisLetter::C] = angles.1;
@@ -579,7 +580,11 @@ impl Machine {
         let at_zero = end_w[tilt_letter] == 0.0 && end_w[AxisLetter::C] == 0.0;
         if reset && (motion.is_some() || at_zero) {
             self.tilt.plane_tcpm = false;
+            // TCPM off where the rotary move left the tool: the position becomes the
+            // machine's own X Y Z there.
+            self.set_workpiece_pos(end_w);
             self.sync_tcpm(&mut emit);
+            end_w = self.workpiece_pos();
         }
         if self.tilt.deferred {
             // The new plane holds from here on; the rotary moves above are workpiece

@@ -38,8 +38,9 @@ use std::collections::VecDeque;
 use super::exec::{Flow, Machine};
 use super::lexer::{Lexer, TokKind};
 use super::parser::{PResult, Stmt, text_of, unexpected, upper};
+use super::plane_math::{self as pm, Tilt};
 use crate::diag::ProgramError;
-use crate::op::{Op, OpKind, SourceLoc};
+use crate::op::{AxisLetter, Op, OpKind, Pose, SourceLoc};
 
 /// The modes FUNCTION TCPM sets.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -174,6 +175,11 @@ impl Machine {
             None
         };
         if want != self.tilt.kin_on || (want && feed != self.tilt.kin_feed) {
+            let reframe = if want != self.tilt.kin_on {
+                self.reframe(want)
+            } else {
+                None
+            };
             self.tilt.kin_on = want;
             self.tilt.kin_feed = feed;
             // Switch at rest on the programmed point, not inside a blended corner.
@@ -181,8 +187,47 @@ impl Machine {
             emit(OpKind::Tcpm {
                 on: want,
                 compensation_feed: feed,
+                reframe,
             });
         }
+    }
+
+    /// Re-expresses the present position for TCPM switching `on` (or off) where the machine
+    /// stands: with TCPM off the program's X Y Z are the machine's own axes, with it on the
+    /// tool tip on the workpiece, and the table geometry maps one into the other at the
+    /// present rotary angles. Axes the next block does not program keep the tool where it is.
+    /// Returns the new pose in workpiece coordinates (untilted, after the cycle transforms),
+    /// or `None` when the geometry is not known (the position is then left as it is).
+    fn reframe(&mut self, on: bool) -> Option<Pose> {
+        let g = self.tilt.geometry?;
+        let w = self.workpiece_pos();
+        let t = match g.tilt {
+            Tilt::A => w[AxisLetter::A],
+            Tilt::B => w[AxisLetter::B],
+        };
+        let c = w[AxisLetter::C];
+        let p = [w[AxisLetter::X], w[AxisLetter::Y], w[AxisLetter::Z]];
+        let q = if on {
+            g.machine_to_tip(p, t, c)
+        } else {
+            g.tip_to_machine(p, t, c)
+        };
+        let mut now = w;
+        (now[AxisLetter::X], now[AxisLetter::Y], now[AxisLetter::Z]) = (q[0], q[1], q[2]);
+        self.set_workpiece_pos(now);
+        Some(now)
+    }
+
+    /// Sets the position from workpiece coordinates `w` (untilted, after the cycle
+    /// transforms), in the terms of the working plane in force.
+    pub(super) fn set_workpiece_pos(&mut self, w: Pose) {
+        let back = pm::apply(
+            &pm::transpose(&self.tilt.r),
+            [w[AxisLetter::X], w[AxisLetter::Y], w[AxisLetter::Z]],
+        );
+        let mut m = w;
+        (m[AxisLetter::X], m[AxisLetter::Y], m[AxisLetter::Z]) = (back[0], back[1], back[2]);
+        self.pos = self.cyc.xf.unmap_point(&m);
     }
 
     /// M128 (`on`, with the feed of the compensating moves in mm/s when an F follows it) /
@@ -239,6 +284,7 @@ mod tests {
                 OpKind::Tcpm {
                     on,
                     compensation_feed,
+                    ..
                 } => Some((on, compensation_feed.map(|f| f * 60.0))),
                 _ => None,
             })

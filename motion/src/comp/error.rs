@@ -72,6 +72,12 @@ pub enum CompError {
         /// The block.
         loc: SourceLoc,
     },
+    /// TCPM switched (M128/M129, FUNCTION TCPM) while compensation is on.
+    #[error("{}: TCPM switched while radius compensation is on; cancel it with R0 or DEP first", Where(*loc))]
+    TcpmWhileCompensating {
+        /// The block.
+        loc: SourceLoc,
+    },
     /// Compensation was requested with a negative effective tool radius (R + DR < 0).
     #[error("{}: the effective tool radius {radius} mm is negative", Where(*loc))]
     NegativeRadius {
@@ -188,6 +194,7 @@ impl CompError {
             | CompError::SplineCompensated { loc, .. }
             | CompError::CurveAfterCompensation { loc, .. }
             | CompError::ToolChangeWhileCompensating { loc, .. }
+            | CompError::TcpmWhileCompensating { loc, .. }
             | CompError::NegativeRadius { loc, .. }
             | CompError::Discontinuity { loc, .. }
             | CompError::ArcTooSmall { loc, .. }

@@ -344,6 +344,18 @@ impl Compensator {
                 _ => Err(CompError::SplineCompensated { loc }),
             },
             OpKind::Line { .. } | OpKind::Arc { .. } => self.motion(op),
+            OpKind::Tcpm {
+                reframe: Some(p), ..
+            } => {
+                if !matches!(self.state, State::Off) || self.approach.is_some() {
+                    return Err(CompError::TcpmWhileCompensating { loc });
+                }
+                // The machine stands still; its position in the new frame (workpiece
+                // coordinates) in the terms of the plane in force.
+                self.pos = crate::tilt::reexpress(&crate::tilt::IDENTITY, &self.in_plane, p);
+                self.route(Trail::Pass(op));
+                Ok(())
+            }
             OpKind::WorkingPlane { rotation } => {
                 // The tool stands where it stood; from here on in the new plane's terms.
                 self.pos = crate::tilt::reexpress(&self.in_plane, rotation, &self.pos);

@@ -42,7 +42,7 @@ use crate::error::MotionError;
 use crate::geom::{Arc, AxisBounds, GeomError, Line, Poly, Segment, finite_pose, letter};
 use crate::limits::Headroom;
 use crate::profile::Ramp;
-use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
+use klar_interp::{AxisLetter, Feed, Op, OpKind, Pose, SourceLoc};
 use path::{Element, MAX_OVERRIDE, Piece, PieceError, Shape, Waiting, piece_limits};
 use speed::{Motion, Window};
 use std::collections::VecDeque;
@@ -412,8 +412,21 @@ impl Planner {
             OpKind::Tcpm {
                 on,
                 compensation_feed,
+                reframe,
             } => {
-                // The switch follows an exact stop: the moves after it get the new limits.
+                // The switch follows an exact stop: the moves after it get the new limits,
+                // and start where the machine stands, expressed in the new frame.
+                if let Some(p) = reframe {
+                    if !finite_pose(p) {
+                        return Err(MotionError::Discontinuity {
+                            loc: op.loc,
+                            axis: AxisLetter::X,
+                            gap: f64::NAN,
+                        });
+                    }
+                    self.flush()?;
+                    self.planned_pose = *p;
+                }
                 self.tcpm = *on;
                 self.compensation_feed = compensation_feed.filter(|_| *on);
                 self.config.limits = if *on {
@@ -532,6 +545,12 @@ impl Planner {
             match self.markers.front() {
                 Some(Marker::Event { at, .. }) if *at <= self.reached + STOP_SNAP => {
                     if let Some(Marker::Event { op, .. }) = self.markers.pop_front() {
+                        if let OpKind::Tcpm {
+                            reframe: Some(p), ..
+                        } = &op.kind
+                        {
+                            self.reframe(*p);
+                        }
                         return Some(Step::Event(op));
                     }
                 }
@@ -601,6 +620,25 @@ impl Planner {
                 continue;
             }
             return Some(Step::Sample(sample));
+        }
+    }
+
+    /// The frame changed under the machine standing at the end of the path so far (a TCPM
+    /// switch): the pieces behind it are done, and the pose it stands at is `p` from now on,
+    /// so every sample after the switch event is in the new frame.
+    fn reframe(&mut self, p: Pose) {
+        while self
+            .pieces
+            .front()
+            .is_some_and(|piece| piece.end() <= self.reached + STOP_SNAP)
+        {
+            if let Some(piece) = self.pieces.pop_front() {
+                self.rest_loc = piece.loc;
+            }
+        }
+        self.rest_pose = p;
+        if let Some(sample) = self.stash.as_mut() {
+            sample.pose = p;
         }
     }
 
