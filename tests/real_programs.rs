@@ -7,11 +7,10 @@
 
 mod common;
 
-use common::{commanded, run, temp_program};
+use common::{arg, commanded, klar_cli, run, temp_program};
 use klar::config::{ActivePreset, BUILTIN_MILL, BUILTIN_MILL5, MachineConfig};
 use klar::testrun::test_run;
-use std::path::{Path, PathBuf};
-use std::process::Command;
+use std::path::PathBuf;
 
 /// A post-style job: outline with one tool, two drilled holes with another, `M140 MB MAX`
 /// after each tool call and at the end.
@@ -254,7 +253,7 @@ fn the_active_preset_holds_from_the_start_and_the_check_names_it() {
         .to_string();
     assert!(err.contains("active_preset = 9"), "{err}");
     // The check report says which preset is active.
-    let (ok, out, err) = klar(&[
+    let (ok, out, err) = klar_cli(&[
         "check",
         arg(&path),
         "--machine",
@@ -290,43 +289,27 @@ fn machine_path(name: &str) -> PathBuf {
         .join("machine.toml")
 }
 
-fn klar(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_klar"))
-        .args(args)
-        .output()
-        .expect("klar runs");
-    (
-        out.status.success(),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
-
-fn arg(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 path")
-}
-
 #[test]
 fn check_judges_a_program_on_the_machine_run_uses() {
     // C is not an axis of the built-in mill: check and run both refuse, at the same line.
     let text = "BEGIN PGM AUX MM\nL X+0 Y+0 Z+50 R0 FMAX\nL C+90 FMAX\nEND PGM AUX MM\n";
     let path = temp_program("aux.h", text);
-    let (ok, _, check_err) = klar(&["check", arg(&path)]);
+    let (ok, _, check_err) = klar_cli(&["check", arg(&path)]);
     assert!(!ok, "check must refuse what run refuses");
     assert!(check_err.contains(":3:"), "{check_err}");
     assert!(
         check_err.contains("axis C is not on this machine"),
         "{check_err}"
     );
-    let (ok, _, run_err) = klar(&["run", arg(&path)]);
+    let (ok, _, run_err) = klar_cli(&["run", arg(&path)]);
     assert!(!ok);
     assert!(run_err.contains(":3:"), "{run_err}");
     // On its own, without a machine, the program is fine.
-    let (ok, _, err) = klar(&["check", "--program-only", arg(&path)]);
+    let (ok, _, err) = klar_cli(&["check", "--program-only", arg(&path)]);
     assert!(ok, "{err}");
     // The plain check says which machine it used.
     let good = temp_program("good.h", "BEGIN PGM G MM\nL Z+50 R0 FMAX\nEND PGM G MM\n");
-    let (ok, out, err) = klar(&["check", arg(&good)]);
+    let (ok, out, err) = klar_cli(&["check", arg(&good)]);
     assert!(ok, "{err}");
     assert!(out.contains("ok on klar simulated 3-axis mill"), "{out}");
 }

@@ -158,12 +158,12 @@ impl std::fmt::Debug for Interpreter {
     }
 }
 
-fn whole_file_error(file: &Path, error: &ProgramError) -> Diagnostic {
+pub(crate) fn whole_file_error(file: &Path, error: &ProgramError) -> Diagnostic {
     Diagnostic::new(file.to_path_buf(), 1, 1, None, error)
 }
 
 /// Opens a program file and recognises its dialect.
-fn open_any(path: &Path) -> Result<(Dialect, Box<dyn ProgramInput>), Diagnostic> {
+pub(crate) fn open_any(path: &Path) -> Result<(Dialect, Box<dyn ProgramInput>), Diagnostic> {
     let file =
         File::open(path).map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
     let mut reader = BufReader::with_capacity(64 * 1024, file);

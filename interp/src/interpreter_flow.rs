@@ -2,16 +2,14 @@
 //! and the contour subprograms of SL cycles.
 
 use std::collections::VecDeque;
-use std::fs::File;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 
 use super::{
     CHECK_JUMP_LIMIT, Interpreter, MAX_PROGRAM_DEPTH, MAX_SUBPROGRAM_DEPTH, Mode,
-    RUN_IDLE_JUMP_LIMIT, Unit, whole_file_error,
+    RUN_IDLE_JUMP_LIMIT, Unit, open_any, whole_file_error,
 };
 use crate::diag::{Diagnostic, ProgramError};
-use crate::dialect::{Dialect, detect_dialect};
+use crate::dialect::Dialect;
 use crate::klartext::exec::{Flow, LabelKey};
 use crate::klartext::parser::{LabelRef, Stmt};
 use crate::op::SourceLoc;
@@ -19,20 +17,12 @@ use crate::source::{BlockStart, ProgramInput};
 
 /// Opens a Klartext file for reading, checking its dialect.
 fn open_klartext(path: &Path) -> Result<Box<dyn ProgramInput>, Diagnostic> {
-    let file =
-        File::open(path).map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
-    let mut reader = BufReader::with_capacity(64 * 1024, file);
-    let head = reader
-        .fill_buf()
-        .map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
-    let head = &head[..head.len().min(4096)];
-    match detect_dialect(path, head) {
-        Some(Dialect::Klartext) => Ok(Box::new(reader)),
-        Some(other) => Err(whole_file_error(
+    match open_any(path)? {
+        (Dialect::Klartext, reader) => Ok(reader),
+        (other, _) => Err(whole_file_error(
             path,
             &ProgramError::DialectNotSupported(other.name()),
         )),
-        None => Err(whole_file_error(path, &ProgramError::UnknownDialect)),
     }
 }
 

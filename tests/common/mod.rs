@@ -194,3 +194,21 @@ pub fn compensated(
     }
     out
 }
+
+/// Runs the `klar` binary with `args`: (success, stdout, stderr).
+pub fn klar_cli(args: &[&str]) -> (bool, String, String) {
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_klar"))
+        .args(args)
+        .output()
+        .expect("klar runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+/// A path as a command-line argument.
+pub fn arg(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 path")
+}

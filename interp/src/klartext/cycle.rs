@@ -435,30 +435,24 @@ fn cycle_number(text: &[u8], i: &mut usize) -> PResult<(u32, Option<u8>)> {
 /// Skips a keyword (case-insensitive) at `i` when it is there, also when a digit follows it
 /// directly (`DEF9`).
 fn keyword_before_number(text: &[u8], i: &mut usize, word: &[u8]) -> bool {
-    let mut j = *i;
-    skip_blanks(text, &mut j);
-    let end = j + word.len();
-    let hit = text
-        .get(j..end)
-        .is_some_and(|s| s.eq_ignore_ascii_case(word))
-        && !text
-            .get(end)
-            .is_some_and(|c| c.is_ascii_alphabetic() || *c == b'_');
-    if hit {
-        *i = end;
-    }
-    hit
+    skip_word(text, i, word, |c| c.is_ascii_alphabetic() || c == b'_')
 }
 
 /// Skips a keyword (case-insensitive) at `i` when it is there.
 fn keyword(text: &[u8], i: &mut usize, word: &[u8]) -> bool {
+    skip_word(text, i, word, |c| c.is_ascii_alphanumeric())
+}
+
+/// Skips `word` (case-insensitive, after blanks) at `i` when it is there and the byte after it
+/// does not continue it (`continues`).
+fn skip_word(text: &[u8], i: &mut usize, word: &[u8], continues: impl Fn(u8) -> bool) -> bool {
     let mut j = *i;
     skip_blanks(text, &mut j);
     let end = j + word.len();
     let hit = text
         .get(j..end)
         .is_some_and(|s| s.eq_ignore_ascii_case(word))
-        && !text.get(end).is_some_and(u8::is_ascii_alphanumeric);
+        && !text.get(end).is_some_and(|c| continues(*c));
     if hit {
         *i = end;
     }

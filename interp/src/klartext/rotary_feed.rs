@@ -251,22 +251,10 @@ impl Machine {
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_support::{klartext, mill5_ops as mill5};
     use crate::interpreter::Interpreter;
     use crate::op::{AxisLetter, Feed, Op, OpKind, Pose};
     use std::f64::consts::PI;
-
-    /// The pivots of machines/mill5.toml: the tilt axis A 100 mm below the table, the table
-    /// axis C through the origin.
-    fn mill5(name: &str, text: &str) -> Result<Vec<Op>, String> {
-        Interpreter::from_source(name, text, Pose::ZERO)
-            .with_table_geometry(AxisLetter::A, [0.0, 0.0, -100.0], [0.0, 0.0, 0.0])
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|d| format!("{}:{}: {}", d.line, d.col, d.message))
-    }
-
-    fn klartext(body: &str) -> String {
-        format!("0 BEGIN PGM T MM\n{body}\n99 END PGM T MM\n")
-    }
 
     /// The lines of a program as (from, to, feed).
     fn lines(ops: &[Op]) -> Vec<(Pose, Pose, Feed)> {

@@ -263,19 +263,8 @@ impl Machine {
 
 #[cfg(test)]
 mod tests {
-    use crate::interpreter::Interpreter;
-    use crate::op::{AxisLetter, Feed, Op, OpKind, Pose};
-
-    fn ops(name: &str, text: &str) -> Result<Vec<Op>, String> {
-        Interpreter::from_source(name, text, Pose::ZERO)
-            .with_table_geometry(AxisLetter::A, [0.0, 0.0, -100.0], [0.0, 0.0, 0.0])
-            .collect::<Result<Vec<_>, _>>()
-            .map_err(|d| format!("{}:{}: {}", d.line, d.col, d.message))
-    }
-
-    fn klartext(body: &str) -> String {
-        format!("0 BEGIN PGM T MM\n{body}\n99 END PGM T MM\n")
-    }
+    use super::super::test_support::{klartext, mill5_ops as ops};
+    use crate::op::{Feed, Op, OpKind};
 
     /// The TCPM ops as (on, compensation feed in mm/min).
     fn switches(ops: &[Op]) -> Vec<(bool, Option<f64>)> {

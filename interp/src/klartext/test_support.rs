@@ -30,3 +30,22 @@ pub(crate) fn run(m: &mut Machine, blocks: &str) -> Result<(), String> {
     }
     Ok(())
 }
+
+/// Runs `text` on the table-table geometry of machines/mill5.toml (the tilt axis A 100 mm
+/// below the table, the table axis C through the origin); the ops or the first error as
+/// `line:col: message`.
+pub(crate) fn mill5_ops(name: &str, text: &str) -> Result<Vec<crate::op::Op>, String> {
+    crate::interpreter::Interpreter::from_source(name, text, crate::op::Pose::ZERO)
+        .with_table_geometry(
+            crate::op::AxisLetter::A,
+            [0.0, 0.0, -100.0],
+            [0.0, 0.0, 0.0],
+        )
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(|d| format!("{}:{}: {}", d.line, d.col, d.message))
+}
+
+/// `body` as a whole Klartext program.
+pub(crate) fn klartext(body: &str) -> String {
+    format!("0 BEGIN PGM T MM\n{body}\n99 END PGM T MM\n")
+}
