@@ -15,8 +15,10 @@ pub(super) struct PendingStop {
 
 /// Cycles the axes must stay still before a stop counts as at rest.
 const REST_CYCLES: u32 = 20;
-/// Largest movement per cycle that counts as still, mm or degrees.
-const REST_STEP: f64 = 2e-4;
+/// Band an axis must stay within (around where it last moved to) to count as still, mm or
+/// degrees: a position control dithering by a few encoder counts around its target is at
+/// rest; a creep out of the band restarts the count.
+const REST_BAND: f64 = 1e-3;
 /// Longest a stop may take before the run gives up waiting, s.
 const STOP_TIMEOUT: f64 = 10.0;
 /// Longest the run waits for faulted axes (whose feedback may be stale or noisy) to show
@@ -116,17 +118,38 @@ impl Run<'_, '_> {
             axes: self.figures_now(),
         };
         let period = self.config.servo_period;
+        // Axes whose feedback cannot be trusted to show rest (faulted: their drives brake on
+        // their own; a lost link shows a stale position, a broken encoder noise) are waited
+        // for at most FAULTED_WAIT; the others must be still for REST_CYCLES.
+        let tripped = axis.and_then(|a| self.letters.iter().position(|&l| l == a));
+        let faulted: Vec<bool> = (0..self.letters.len())
+            .map(|i| {
+                Some(i) == tripped || self.io.feedback().get(i).is_some_and(|f| f.fault.is_some())
+            })
+            .collect();
         let mut stops: Vec<AxisStop> = self
             .io
             .setpoints()
             .iter()
             .zip(&self.stop_limits)
-            .map(|(sp, &(a, j))| AxisStop::new(*sp, a, j))
+            .enumerate()
+            .map(|(i, (sp, &(a, j)))| {
+                let mut from = *sp;
+                if faulted.get(i).copied().unwrap_or(false) {
+                    // An axis that faulted or could not follow is held where it is: a ramp
+                    // of its command would only pull it on (its drive brakes by itself).
+                    if let Some(&x) = self.actual.get(i) {
+                        from.position = x;
+                    }
+                    from.velocity = 0.0;
+                    from.acceleration = 0.0;
+                } else if let Some(v) = self.config.axes.get(i).map(|c| c.max_velocity) {
+                    // Braking never starts from beyond the axis's speed limit.
+                    from.velocity = from.velocity.clamp(-v, v);
+                }
+                AxisStop::new(from, a, j)
+            })
             .collect();
-        // Axes whose feedback cannot be trusted to show rest (faulted: their drives brake on
-        // their own; a lost link shows a stale position, a broken encoder noise) are waited
-        // for at most FAULTED_WAIT; the others must be still for REST_CYCLES.
-        let tripped = axis.and_then(|a| self.letters.iter().position(|&l| l == a));
         let mut still = 0;
         let mut still_faulted = 0;
         let mut last = self.actual.clone();
@@ -155,17 +178,19 @@ impl Run<'_, '_> {
                 .io
                 .feedback()
                 .iter()
-                .zip(self.actual.iter().zip(&last))
+                .zip(self.actual.iter().zip(last.iter_mut()))
                 .enumerate()
             {
-                let moving = (a - b).abs() > REST_STEP;
+                let moving = (a - *b).abs() > REST_BAND;
+                if moving {
+                    *b = *a;
+                }
                 if f.fault.is_some() || Some(i) == tripped {
                     moved_faulted |= moving;
                 } else {
                     moved |= moving;
                 }
             }
-            last.clone_from(&self.actual);
             still_faulted = if moved_faulted { 0 } else { still_faulted + 1 };
             if stops.iter().all(AxisStop::at_rest) && !moved {
                 still += 1;
