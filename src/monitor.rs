@@ -202,6 +202,8 @@ pub enum StopCause {
     },
     /// The operator asked for a stop.
     Requested,
+    /// The operator stopped the run from outside (a signal to `klar run` or `klar serve`).
+    Operator,
 }
 
 impl fmt::Display for StopCause {
@@ -221,6 +223,7 @@ impl fmt::Display for StopCause {
                 limit * 1e3
             ),
             StopCause::Requested => write!(f, "stop requested"),
+            StopCause::Operator => write!(f, "stopped by the operator"),
         }
     }
 }

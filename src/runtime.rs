@@ -16,11 +16,16 @@
 //! reports the cause, the block and the axis ([`StopReport`]); after
 //! [`Run::reset_faults`] the control's position is read back from the drives.
 //!
+//! An operator's stop from outside the run ([`OperatorStop`]: SIGINT or SIGTERM to the `klar`
+//! binary) is looked at once per servo cycle: a feed hold on the path, and on a second request
+//! the quick stop.
+//!
 //! Spindle commands reach the spindle backend when their block is reached; after a command to
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
 mod error;
+mod operator;
 mod spindle;
 mod stop;
 pub(crate) mod stream;
@@ -37,6 +42,7 @@ use klar_interp::op::SpindleId;
 use klar_interp::{AxisLetter, Op, OpKind, SourceLoc};
 use klar_motion::kinematics::Kinematics;
 use klar_motion::{AxisFault, Planner, Sample, Setpoint, Step};
+pub use operator::{OperatorStop, StopLevel};
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
@@ -135,6 +141,10 @@ pub struct Run<'a, 'w> {
     /// Wall-clock lateness counts against the limit (some axis is not simulated, or the
     /// machine sets the limit explicitly).
     enforce_wall_lateness: bool,
+    /// The operator's stop request the run watches, if any.
+    operator: Option<OperatorStop>,
+    /// The operator's stop level the run has acted on.
+    operator_seen: StopLevel,
 }
 
 impl Run<'_, '_> {
@@ -212,7 +222,7 @@ impl Run<'_, '_> {
                 },
             );
         }
-        Ok(())
+        self.check_operator()
     }
 
     /// In realtime mode, sleeps until the cycle due at machine time `t`.
@@ -559,6 +569,8 @@ impl<'a, 'w> Run<'a, 'w> {
                     .iter()
                     .any(|a| !matches!(a.backend, crate::config::BackendConfig::Sim(_))),
             letters,
+            operator: None,
+            operator_seen: StopLevel::None,
         })
     }
 

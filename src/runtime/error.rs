@@ -60,6 +60,16 @@ pub enum RunError {
         /// Program line being executed.
         line: u32,
     },
+    /// The operator stopped the run from outside (SIGINT or SIGTERM to `klar run`, see
+    /// [`OperatorStop`](super::OperatorStop)): the axes were brought to rest on the path (or,
+    /// on a second request, with a quick stop) and the drives switched off.
+    #[error("stopped by the operator {}", operator_where(*line, *block))]
+    Operator {
+        /// Program line being executed when the request came.
+        line: u32,
+        /// Block number being executed, if the block has one.
+        block: Option<u64>,
+    },
     /// The machine's backends could not be opened.
     #[error("{0}")]
     Machine(#[from] MachineError),
@@ -93,5 +103,14 @@ fn where_text(line: u32, block: Option<u64>) -> String {
     match block {
         Some(b) => format!("block {b}, line {line}"),
         None => format!("line {line}"),
+    }
+}
+
+/// `at block N (line L)`, `at line L`, or `before the first block` (line 0: nothing ran yet).
+fn operator_where(line: u32, block: Option<u64>) -> String {
+    match (block, line) {
+        (Some(b), _) => format!("at block {b} (line {line})"),
+        (None, 0) => "before the first block".to_string(),
+        (None, _) => format!("at line {line}"),
     }
 }
