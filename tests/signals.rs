@@ -296,8 +296,17 @@ fn sigint_during_a_realtime_run_stops_on_the_path() {
 
 #[test]
 fn a_second_sigterm_during_the_stop_makes_it_a_quick_stop() {
-    // The feed hold from 50 mm/s takes about 60 ms: the second signal comes within it.
-    let (stderr, f) = realtime_stop("twice", &["TERM", "TERM"], Duration::from_millis(15), 143);
+    // The feed hold from 50 mm/s takes about 60 ms: the second signal comes within it,
+    // unless this process was held up longer than that (a loaded machine), when the first
+    // stop ends on the path and the test tries again.
+    let mut tries = 0;
+    let (stderr, f) = loop {
+        let (stderr, f) = realtime_stop("twice", &["TERM", "TERM"], Duration::from_millis(15), 143);
+        tries += 1;
+        if stderr.contains("quick stop at t = ") || tries == 3 {
+            break (stderr, f);
+        }
+    };
     assert!(stderr.contains("quick stop at t = "), "{stderr}");
     assert!(
         f.distance <= x_braking(FEED),
