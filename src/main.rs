@@ -11,6 +11,7 @@ use std::process::ExitCode;
 
 mod progress;
 mod render;
+mod signals;
 
 /// Prints a line to standard output, ignoring a closed pipe (`klar run … | head` must not
 /// panic).
@@ -376,7 +377,12 @@ fn cmd_run(
         realtime,
         trace: trace_file.as_mut().map(|w| w as &mut dyn Write),
     };
-    let result = progress::run_with_progress(program, &config, options, quiet);
+    // SIGINT and SIGTERM stop the run under control from here on.
+    let signals = signals::SignalWatch::install()
+        .inspect_err(|e| eprintln!("warning: signals will end the run abruptly: {e}"))
+        .ok();
+    let stop = signals.as_ref().map(signals::SignalWatch::stop);
+    let result = progress::run_with_progress(program, &config, options, quiet, stop);
     let (report, error) = match result {
         Ok(r) => (r, None),
         Err(f) => (f.report, Some(f.error)),
@@ -417,6 +423,10 @@ fn cmd_run(
     }
     match error {
         None => ExitCode::SUCCESS,
+        // Reported above; the exit code tells which signal stopped the run.
+        Some(RunError::Operator { .. }) => signals
+            .as_ref()
+            .map_or(ExitCode::FAILURE, signals::SignalWatch::exit_code),
         Some(e) => {
             eprintln!("stopped: {e}");
             ExitCode::FAILURE
@@ -451,7 +461,15 @@ fn cmd_serve(
             return ExitCode::FAILURE;
         }
     };
-    let served = runtime.block_on(klar::serve::serve(options, |addr| {
+    // SIGINT and SIGTERM stop a running program under control, then the server.
+    let signals = match signals::SignalWatch::install() {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("cannot install the signal handlers: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    let served = runtime.block_on(klar::serve::serve_until(options, signals.stop(), |addr| {
         let query = if token.is_some() { "?token=…" } else { "" };
         say!("klar dashboard on http://{addr}/{query}");
         let _ = std::io::stdout().flush();

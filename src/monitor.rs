@@ -65,38 +65,14 @@ impl AxisStop {
             -self.acceleration.signum()
         };
         let (u, b) = (self.velocity * s, self.acceleration * s);
-        let (a, j) = (self.a_max, self.j_max);
-        // Speed lost if the acceleration ramps from b (< 0) back to zero from now on.
-        let still_lost = if b < 0.0 { b * b / (2.0 * j) } else { 0.0 };
-        let jerk = if b < 0.0 && u <= still_lost {
-            j
-        } else if b > -a {
-            -j
-        } else {
-            0.0
-        };
-        let mut b1 = b + jerk * dt;
-        let mut jerk = jerk;
-        if b1 < -a {
-            // Reaching the limit inside the step: hold it from there (a small averaging
-            // error within one cycle).
-            b1 = -a;
-            jerk = (b1 - b) / dt;
-        }
-        let u1 = u + b * dt + 0.5 * jerk * dt * dt;
-        let du = u * dt + 0.5 * b * dt * dt + jerk * dt * dt * dt / 6.0;
-        if u1 <= 0.0 || (b1 >= 0.0 && u1 <= j * dt * dt) {
-            // The speed reaches zero within this step: stop where it does (the distance up
-            // to the zero crossing of the quadratic speed, at most the step's distance).
-            let t0 = zero_crossing(u, b, jerk, dt);
-            let d = u * t0 + 0.5 * b * t0 * t0 + jerk * t0 * t0 * t0 / 6.0;
-            self.position += s * d.max(0.0);
-            self.velocity = 0.0;
-            self.acceleration = 0.0;
-        } else {
-            self.position += s * du;
+        let (u1, b1, d) = advance(u, b, dt, self.a_max, self.j_max);
+        self.position += s * d.max(0.0);
+        if u1 > 0.0 {
             self.velocity = s * u1;
             self.acceleration = s * b1;
+        } else {
+            self.velocity = 0.0;
+            self.acceleration = 0.0;
         }
         self.setpoint()
     }
@@ -108,6 +84,69 @@ impl AxisStop {
             velocity: self.velocity,
             acceleration: self.acceleration,
         }
+    }
+}
+
+/// One step `dt` of a stop along the direction of motion from speed `u ≥ 0` and acceleration
+/// `b`: returns the speed, the acceleration and the distance at its end (speed and
+/// acceleration zero once at rest). The stop brakes harder ([`press`]) until the landing
+/// curve `u = b²/(2j)` is reached, then ramps the acceleration back to zero with jerk `j` so
+/// that both reach zero together ([`ramp_to_rest`]). The switch falls inside the step where
+/// it is due (found by bisection): a switch a step late would have to end with the
+/// acceleration cut from hundreds of mm/s² to zero, a step early would stop longer than the
+/// braking distance.
+fn advance(u: f64, b: f64, dt: f64, a: f64, j: f64) -> (f64, f64, f64) {
+    // On or past the landing curve: past it when the stop began too late to land with j.
+    let landing = |u: f64, b: f64| u <= 0.0 || (b < 0.0 && b * b >= 2.0 * j * u);
+    if landing(u, b) {
+        return ramp_to_rest(u, b, dt, j);
+    }
+    let (up, bp, dp) = press(u, b, dt, a, j);
+    if !landing(up, bp) {
+        return (up, bp, dp);
+    }
+    let (mut lo, mut hi) = (0.0, dt);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        let (um, bm, _) = press(u, b, mid, a, j);
+        if landing(um, bm) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let (ut, bt, dpt) = press(u, b, hi, a, j);
+    let (u2, b2, d2) = ramp_to_rest(ut, bt, dt - hi, j);
+    (u2, b2, dpt + d2)
+}
+
+/// Braking harder for `t`: the acceleration ramps toward `−a` with jerk `−j` and holds there.
+/// Returns speed, acceleration and distance.
+fn press(u: f64, b: f64, t: f64, a: f64, j: f64) -> (f64, f64, f64) {
+    let t1 = if b > -a { ((b + a) / j).min(t) } else { 0.0 };
+    let u1 = u + b * t1 - 0.5 * j * t1 * t1;
+    let b1 = b - j * t1;
+    let d1 = u * t1 + 0.5 * b * t1 * t1 - j * t1 * t1 * t1 / 6.0;
+    let t2 = t - t1;
+    (u1 + b1 * t2, b1, d1 + u1 * t2 + 0.5 * b1 * t2 * t2)
+}
+
+/// Ramping the acceleration `b < 0` back to zero for `t` with the constant jerk that brings
+/// speed and acceleration to zero together, at most `j` (with `j`, a stop that began too late
+/// reaches zero speed first and ends there). Returns speed, acceleration and distance; zero
+/// speed and acceleration once at rest.
+fn ramp_to_rest(u: f64, b: f64, t: f64, j: f64) -> (f64, f64, f64) {
+    if u <= 0.0 || b >= 0.0 {
+        return (0.0, 0.0, 0.0);
+    }
+    let jerk = (b * b / (2.0 * u)).min(j);
+    let t_flat = -b / jerk;
+    let end = zero_crossing(u, b, jerk, t.min(t_flat));
+    let d = u * end + 0.5 * b * end * end + jerk * end * end * end / 6.0;
+    if end < t {
+        (0.0, 0.0, d)
+    } else {
+        (u + b * t + 0.5 * jerk * t * t, b + jerk * t, d)
     }
 }
 
@@ -163,6 +202,8 @@ pub enum StopCause {
     },
     /// The operator asked for a stop.
     Requested,
+    /// The operator stopped the run from outside (a signal to `klar run` or `klar serve`).
+    Operator,
 }
 
 impl fmt::Display for StopCause {
@@ -182,6 +223,7 @@ impl fmt::Display for StopCause {
                 limit * 1e3
             ),
             StopCause::Requested => write!(f, "stop requested"),
+            StopCause::Operator => write!(f, "stopped by the operator"),
         }
     }
 }
@@ -323,6 +365,40 @@ mod tests {
             (d - expected).abs() < 5e-3,
             "distance {d}, expected {expected}"
         );
+    }
+
+    #[test]
+    fn a_stop_taken_over_while_braking_lands_without_an_acceleration_step() {
+        // Taken over mid-way through another deceleration (as when a quick stop cuts a feed
+        // hold short), at the servo period: by finite differences of the positions, as a
+        // trace shows it, the jerk stays within the limit up to rest.
+        let (a_max, j_max, dt) = (2000.0, 50_000.0, 1e-3);
+        let mut stop = AxisStop::new(
+            Setpoint {
+                position: 0.0,
+                velocity: 43.99,
+                acceleration: -800.0,
+            },
+            a_max,
+            j_max,
+        );
+        let mut x = vec![0.0];
+        let mut n = 0;
+        while !stop.at_rest() {
+            x.push(stop.step(dt).position);
+            n += 1;
+            assert!(n < 1000, "stop never ends");
+        }
+        let last = *x.last().unwrap();
+        x.extend([last; 4]);
+        let d: Vec<f64> = x.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+        let acc: Vec<f64> = d.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+        let jerk: Vec<f64> = acc.windows(2).map(|w| (w[1] - w[0]) / dt).collect();
+        let peak_a = acc.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        // the first differences need the positions before the take-over: left out
+        let peak_j = jerk.iter().skip(1).fold(0.0f64, |m, v| m.max(v.abs()));
+        assert!(peak_a <= a_max, "peak a {peak_a}");
+        assert!(peak_j <= j_max * 1.05, "peak jerk {peak_j}");
     }
 
     #[test]

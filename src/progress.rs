@@ -3,7 +3,7 @@
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use klar::config::MachineConfig;
-use klar::runtime::{Run, RunFailure, RunOptions, RunReport};
+use klar::runtime::{OperatorStop, Run, RunFailure, RunOptions, RunReport};
 use std::io::IsTerminal;
 use std::path::Path;
 use std::time::{Duration, Instant};
@@ -12,12 +12,13 @@ use std::time::{Duration, Instant};
 const REDRAW: Duration = Duration::from_millis(100);
 
 /// Runs `program` to its end like `run_program`, with a progress bar on a terminal unless
-/// `quiet`.
+/// `quiet`; the run watches `stop` (the signals) when given.
 pub fn run_with_progress(
     program: &Path,
     config: &MachineConfig,
     options: RunOptions<'_>,
     quiet: bool,
+    stop: Option<OperatorStop>,
 ) -> Result<RunReport, Box<RunFailure>> {
     let show = !quiet && std::io::stderr().is_terminal();
     let lines = if show { count_lines(program) } else { 0 };
@@ -34,6 +35,9 @@ pub fn run_with_progress(
         ProgressBar::hidden()
     };
     let mut run = Run::start(program, config, options)?;
+    if let Some(stop) = stop {
+        run.watch_operator_stop(stop);
+    }
     let mut last = Instant::now();
     let mut steps = 0u32;
     let ended = loop {

@@ -16,10 +16,17 @@
 //! reports the cause, the block and the axis ([`StopReport`]); after
 //! [`Run::reset_faults`] the control's position is read back from the drives.
 //!
+//! An operator's stop from outside the run ([`OperatorStop`]: SIGINT or SIGTERM to the `klar`
+//! binary) is looked at once per servo cycle: a feed hold on the path, and on a second request
+//! the quick stop.
+//!
 //! Spindle commands reach the spindle backend when their block is reached; after a command to
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
+mod error;
+mod operator;
+mod spindle;
 mod stop;
 pub(crate) mod stream;
 
@@ -30,10 +37,12 @@ use crate::testrun::{
     block_diagnostic, check_positioning, check_travel, moves_positioning_axis, positioning_axes,
 };
 use crate::trace::TraceWriter;
-use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
-use klar_interp::{AxisLetter, Diagnostic, Op, OpKind, SourceLoc};
+pub use error::RunError;
+use klar_interp::op::SpindleId;
+use klar_interp::{AxisLetter, Op, OpKind, SourceLoc};
 use klar_motion::kinematics::Kinematics;
-use klar_motion::{AxisFault, BackendError, MotionError, Planner, Sample, Setpoint, Step};
+use klar_motion::{AxisFault, Planner, Sample, Setpoint, Step};
+pub use operator::{OperatorStop, StopLevel};
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
@@ -69,72 +78,6 @@ pub struct RunReport {
     pub realtime: bool,
     /// How the run was stopped early by a fault or a request, if it was.
     pub stop: Option<StopReport>,
-}
-
-/// Why a run did not complete.
-#[derive(Debug, thiserror::Error)]
-pub enum RunError {
-    /// Errors found before motion (syntax, or anything the test run refuses): nothing moved.
-    #[error("the program has {} error(s); nothing moved{}", .0.len(), first_of(.0))]
-    Syntax(Vec<Diagnostic>),
-    /// Axes without a reference on a machine that needs homing: nothing moved.
-    #[error("axes not homed: {}; home them first (nothing moved)", letters_list(.0))]
-    NotHomed(Vec<AxisLetter>),
-    /// A run-time program error: motion stopped at the end of the previous block.
-    #[error("{0}")]
-    Program(Diagnostic),
-    /// The planner refused an op.
-    #[error("{0}")]
-    Motion(#[from] MotionError),
-    /// An axis faulted (or the control's following-error monitor tripped on it): the
-    /// axes were brought to rest with a quick stop.
-    #[error("axis {axis}: {fault} (at {})", where_text(*line, *block))]
-    Fault {
-        /// The axis.
-        axis: AxisLetter,
-        /// What it reported.
-        fault: AxisFault,
-        /// Program line being executed.
-        line: u32,
-        /// Block number being executed, if the block has one.
-        block: Option<u64>,
-    },
-    /// The setpoints reached the axes too late (setpoint underrun): the run stopped on the
-    /// path.
-    #[error("setpoint underrun: a setpoint came {:.1} ms late, the limit is {:.1} ms (at {})", .late * 1e3, .limit * 1e3, where_text(*line, *block))]
-    Underrun {
-        /// How late, s.
-        late: f64,
-        /// The machine's limit, s.
-        limit: f64,
-        /// Program line being executed.
-        line: u32,
-        /// Block number being executed, if the block has one.
-        block: Option<u64>,
-    },
-    /// The spindle faulted or did not reach speed.
-    #[error("spindle: {message} (at line {line})")]
-    Spindle {
-        /// What happened.
-        message: String,
-        /// Program line being executed.
-        line: u32,
-    },
-    /// The run was stopped on request (after a feed hold brought it to rest).
-    #[error("stopped on request (at line {line})")]
-    Stopped {
-        /// Program line being executed.
-        line: u32,
-    },
-    /// The machine's backends could not be opened.
-    #[error("{0}")]
-    Machine(#[from] MachineError),
-    /// The backend failed.
-    #[error("backend: {0}")]
-    Backend(#[from] BackendError),
-    /// Writing the trace failed.
-    #[error("trace: {0}")]
-    Trace(#[from] std::io::Error),
 }
 
 /// A run that ended early: the error plus what was measured until then.
@@ -198,43 +141,16 @@ pub struct Run<'a, 'w> {
     /// Wall-clock lateness counts against the limit (some axis is not simulated, or the
     /// machine sets the limit explicitly).
     enforce_wall_lateness: bool,
-}
-
-/// `; the first: <diagnostic>` when there is one.
-fn first_of(diags: &[Diagnostic]) -> String {
-    diags
-        .first()
-        .map(|d| format!("; the first: {d}"))
-        .unwrap_or_default()
-}
-
-/// `A, B, C` for a list of letters.
-fn letters_list(letters: &[AxisLetter]) -> String {
-    letters
-        .iter()
-        .map(ToString::to_string)
-        .collect::<Vec<_>>()
-        .join(", ")
-}
-
-/// `block N (line L)` or `line L`.
-fn where_text(line: u32, block: Option<u64>) -> String {
-    match block {
-        Some(b) => format!("block {b}, line {line}"),
-        None => format!("line {line}"),
-    }
+    /// The operator's stop request the run watches, if any.
+    operator: Option<OperatorStop>,
+    /// The operator's stop level the run has acted on.
+    operator_seen: StopLevel,
 }
 
 impl Run<'_, '_> {
     /// One servo cycle at machine time `t` with the setpoints already in `io`.
     fn servo_cycle(&mut self, t: f64) -> Result<(), RunError> {
-        if self.report.realtime {
-            let due = self.wall_start + Duration::from_secs_f64(t);
-            let now = Instant::now();
-            if now < due {
-                std::thread::sleep(due - now);
-            }
-        }
+        self.wait_until(t);
         let (wall, injected) = self.lateness(t);
         let late = wall + injected;
         if late > self.config.servo_period {
@@ -306,7 +222,18 @@ impl Run<'_, '_> {
                 },
             );
         }
-        Ok(())
+        self.check_operator()
+    }
+
+    /// In realtime mode, sleeps until the cycle due at machine time `t`.
+    fn wait_until(&self, t: f64) {
+        if self.report.realtime {
+            let due = self.wall_start + Duration::from_secs_f64(t);
+            let now = Instant::now();
+            if now < due {
+                std::thread::sleep(due - now);
+            }
+        }
     }
 
     /// How late the setpoints of the cycle due at machine time `t` reach the axes, s: the
@@ -461,99 +388,8 @@ impl Run<'_, '_> {
         }
     }
 
-    /// The main spindle speed for constant surface speed `v` (m/min) at the tool's present
-    /// radius (program X), limited to the machine's maximum.
-    fn surface_speed_rpm(&mut self, v: f64) -> f64 {
-        let radius = self.kin.to_program(&self.commanded)[AxisLetter::X];
-        let max = self.io.spindle_mut().map_or(0.0, |s| s.max_rpm);
-        OpStream::surface_speed_rpm(v, radius, max)
-    }
-
-    /// Under constant surface speed, follows the tool's radius block by block (without
-    /// waiting: the spindle changes speed while the axes move, as on a lathe).
-    fn follow_surface_speed(&mut self) -> Result<(), RunError> {
-        let Some(v) = self.surface_speed else {
-            return Ok(());
-        };
-        let rpm = self.surface_speed_rpm(v);
-        if let Some(s) = self.io.spindle_mut() {
-            let now = s.commanded();
-            if now != 0.0 && (rpm - now.abs()).abs() > 0.01 * now.abs() {
-                s.command(rpm.copysign(now))?;
-            }
-        }
-        Ok(())
-    }
-
     fn diagnostic(&self, loc: SourceLoc, message: String) -> RunError {
         RunError::Program(block_diagnostic(self.path, loc, message))
-    }
-
-    fn spindle_command(
-        &mut self,
-        loc: SourceLoc,
-        dir: SpindleDir,
-        speed: SpindleSpeed,
-    ) -> Result<(), RunError> {
-        let rpm = match speed {
-            SpindleSpeed::Rpm(r) => {
-                self.surface_speed = None;
-                r
-            }
-            SpindleSpeed::SurfaceSpeed(v) => {
-                self.surface_speed = (dir != SpindleDir::Off).then_some(v);
-                self.surface_speed_rpm(v)
-            }
-        };
-        let signed = match dir {
-            SpindleDir::Cw => rpm,
-            SpindleDir::Ccw => -rpm,
-            SpindleDir::Off => 0.0,
-        };
-        let Some(spindle) = self.io.spindle_mut() else {
-            if signed != 0.0 && !self.warned_no_spindle {
-                tracing::warn!(
-                    line = loc.line,
-                    "this machine has no spindle: S/M3/M4 ignored"
-                );
-                self.warned_no_spindle = true;
-            }
-            return Ok(());
-        };
-        if signed.abs() > spindle.max_rpm {
-            let max = spindle.max_rpm;
-            return Err(self.diagnostic(
-                loc,
-                format!("spindle speed S{rpm} is above this machine's {max} rpm"),
-            ));
-        }
-        if signed == spindle.commanded() {
-            return Ok(());
-        }
-        spindle.command(signed)?;
-        let timeout = spindle.at_speed_timeout;
-        if signed == 0.0 {
-            return Ok(());
-        }
-        let waited_from = self.t;
-        loop {
-            self.hold_cycle()?;
-            if let Some(pending) = self.stopping.take() {
-                return Err(self.end_path_stop(pending));
-            }
-            let at_speed = self.io.spindle_mut().is_some_and(|s| s.feedback().at_speed);
-            if at_speed {
-                break;
-            }
-            if self.t - waited_from > timeout {
-                return Err(RunError::Spindle {
-                    message: format!("did not reach {signed} rpm within {timeout} s"),
-                    line: loc.line,
-                });
-            }
-        }
-        self.report.spindle_wait += self.t - waited_from;
-        Ok(())
     }
 }
 
@@ -733,6 +569,8 @@ impl<'a, 'w> Run<'a, 'w> {
                     .iter()
                     .any(|a| !matches!(a.backend, crate::config::BackendConfig::Sim(_))),
             letters,
+            operator: None,
+            operator_seen: StopLevel::None,
         })
     }
 

@@ -21,6 +21,8 @@ const REST_CYCLES: u32 = 20;
 const REST_BAND: f64 = 1e-3;
 /// Longest a stop may take before the run gives up waiting, s.
 const STOP_TIMEOUT: f64 = 10.0;
+/// Longest the run holds the axes after a stop on the path for them to settle, s.
+const SETTLE_WAIT: f64 = 1.0;
 /// Longest the run waits for faulted axes (whose feedback may be stale or noisy) to show
 /// rest, s: their drives brake on their own.
 const FAULTED_WAIT: f64 = 1.0;
@@ -69,8 +71,10 @@ impl Run<'_, '_> {
         });
     }
 
-    /// Ends a path stop at rest: fills in the rest figures and returns its error.
+    /// Ends a path stop at rest: holds the axes until they are still, fills in the rest
+    /// figures and returns its error.
     pub(super) fn end_path_stop(&mut self, pending: PendingStop) -> RunError {
+        self.settle();
         let mut report = pending.report;
         report.t_rest = self.t;
         for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
@@ -80,6 +84,39 @@ impl Run<'_, '_> {
         self.report.stop = Some(report.clone());
         self.stop_report = Some(report);
         pending.error
+    }
+
+    /// Holds the commanded positions until every axis has been still for `REST_CYCLES`
+    /// (at most `SETTLE_WAIT`): the drives are switched off at rest, and the trace ends at
+    /// rest.
+    fn settle(&mut self) {
+        self.io.hold();
+        let period = self.config.servo_period;
+        let mut last = self.actual.clone();
+        let mut still = 0;
+        let cycles = (SETTLE_WAIT / period).ceil() as u64;
+        for _ in 0..cycles {
+            if still >= REST_CYCLES {
+                break;
+            }
+            let t = self.t + period;
+            self.wait_until(t);
+            self.shift += period;
+            if let Err(e) = self.io.cycle(t) {
+                tracing::error!("stop on the path: the backend no longer answers: {e}");
+                break;
+            }
+            if let Err(e) = self.record_cycle(t) {
+                tracing::warn!("stop on the path: trace: {e}");
+            }
+            let moved = self
+                .actual
+                .iter()
+                .zip(&last)
+                .any(|(a, b)| (a - b).abs() > REST_STEP);
+            last.clone_from(&self.actual);
+            still = if moved { 0 } else { still + 1 };
+        }
     }
 
     /// The reaction to a fault the axes cannot ride through: every axis that still follows
@@ -104,6 +141,17 @@ impl Run<'_, '_> {
                 (cause, Some(*axis))
             }
             RunError::Backend(e) => (StopCause::Communication(e.to_string()), None),
+            // A stop on the path cut short by the operator keeps the cause it had.
+            RunError::Operator { .. } => (StopCause::Operator, None),
+            RunError::Stopped { .. } => (StopCause::Requested, None),
+            RunError::Spindle { message, .. } => (StopCause::Spindle(message.clone()), None),
+            RunError::Underrun { late, limit, .. } => (
+                StopCause::Underrun {
+                    late: *late,
+                    limit: *limit,
+                },
+                None,
+            ),
             other => (StopCause::Program(other.to_string()), None),
         };
         tracing::error!(line = self.line, "{cause}: quick stop");
@@ -165,6 +213,7 @@ impl Run<'_, '_> {
                 self.commanded[i] = sp.position;
             }
             let t = self.t + period;
+            self.wait_until(t);
             self.shift += period;
             if let Err(e) = self.io.cycle(t) {
                 tracing::error!("quick stop: the backend no longer answers: {e}");

@@ -3,6 +3,7 @@
 use super::ServeOptions;
 use super::session::{Command, MachineLoop, MachineState, Snapshot, idle_snapshot};
 use crate::config::MachineConfig;
+use crate::runtime::OperatorStop;
 use axum::Json;
 use axum::Router;
 use axum::extract::ws::{Message, WebSocket, WebSocketUpgrade};
@@ -41,8 +42,13 @@ struct Inner {
 }
 
 impl App {
-    /// Starts the machine thread for `options.machine`.
-    pub fn start(options: &ServeOptions) -> std::io::Result<Self> {
+    /// Starts the machine thread for `options.machine`, which watches `stop` (it ends a
+    /// running program under control and the thread once asked); returns the app and the
+    /// thread.
+    pub fn start(
+        options: &ServeOptions,
+        stop: OperatorStop,
+    ) -> std::io::Result<(Self, std::thread::JoinHandle<()>)> {
         let (tx, rx) = std::sync::mpsc::channel();
         let (snapshots, _) = broadcast::channel(256);
         let latest = Arc::new(Mutex::new(idle_snapshot(&options.machine)));
@@ -51,11 +57,12 @@ impl App {
             rx,
             snapshots.clone(),
             latest.clone(),
-        );
-        std::thread::Builder::new()
+        )
+        .with_operator_stop(stop);
+        let thread = std::thread::Builder::new()
             .name("klar-machine".into())
             .spawn(move || machine.run())?;
-        Ok(App {
+        let app = App {
             inner: Arc::new(Inner {
                 commands: Mutex::new(tx),
                 snapshots,
@@ -64,7 +71,8 @@ impl App {
                 token: options.token.clone(),
                 machine: options.machine.clone(),
             }),
-        })
+        };
+        Ok((app, thread))
     }
 
     fn send(&self, command: Command) -> Result<(), ApiError> {

@@ -16,10 +16,14 @@ mod api;
 pub mod session;
 
 use crate::config::MachineConfig;
+use crate::runtime::{OperatorStop, StopLevel};
 use std::net::SocketAddr;
 use std::path::PathBuf;
 
 pub use api::router;
+
+/// How often the server looks whether a stop was requested.
+const STOP_POLL: std::time::Duration = std::time::Duration::from_millis(50);
 
 /// How to serve.
 #[derive(Debug, Clone)]
@@ -64,22 +68,49 @@ pub fn check_access(options: &ServeOptions) -> Result<(), ServeError> {
     Ok(())
 }
 
-/// Binds the listener, starts the machine thread and serves until Ctrl-C. `ready` is called
-/// with the bound address once the server accepts connections.
+/// Binds the listener, starts the machine thread and serves until the runtime is shut down.
+/// `ready` is called with the bound address once the server accepts connections.
 pub async fn serve(
     options: ServeOptions,
+    ready: impl FnOnce(SocketAddr),
+) -> Result<(), ServeError> {
+    serve_until(options, OperatorStop::new(), ready).await
+}
+
+/// Like [`serve`], until `stop` is requested (the `klar` binary requests it on SIGINT and
+/// SIGTERM): a running program then stops under control (a feed hold on the path; a second
+/// request makes it a quick stop), the server stops accepting connections, and this returns
+/// once the machine thread has brought the machine to rest and ended.
+pub async fn serve_until(
+    options: ServeOptions,
+    stop: OperatorStop,
     ready: impl FnOnce(SocketAddr),
 ) -> Result<(), ServeError> {
     check_access(&options)?;
     let listener = tokio::net::TcpListener::bind(options.listen).await?;
     let addr = listener.local_addr()?;
-    let app = api::App::start(&options).map_err(|e| ServeError::Thread(e.to_string()))?;
+    let (app, machine) =
+        api::App::start(&options, stop.clone()).map_err(|e| ServeError::Thread(e.to_string()))?;
     ready(addr);
     tracing::info!(%addr, "dashboard listening");
-    axum::serve(listener, router(app))
-        .with_graceful_shutdown(async {
-            let _ = tokio::signal::ctrl_c().await;
+    let requested = stop.clone();
+    let served = axum::serve(listener, router(app))
+        .with_graceful_shutdown(async move {
+            while requested.level() == StopLevel::None {
+                tokio::time::sleep(STOP_POLL).await;
+            }
         })
-        .await?;
+        .await;
+    // The machine thread ends once a stop is requested (after bringing a running program to
+    // rest); a server that failed asks for it too.
+    if stop.level() == StopLevel::None {
+        stop.request();
+    }
+    let joined = tokio::task::spawn_blocking(move || machine.join()).await;
+    if !matches!(joined, Ok(Ok(()))) {
+        return Err(ServeError::Thread("the machine thread panicked".into()));
+    }
+    served?;
+    tracing::info!("dashboard stopped");
     Ok(())
 }

@@ -6,7 +6,7 @@
 //! never leaves this thread; the web side only talks to it through channels.
 
 use crate::config::MachineConfig;
-use crate::runtime::{Run, RunError, RunOptions, RunStatus};
+use crate::runtime::{OperatorStop, Run, RunError, RunOptions, RunStatus, StopLevel};
 use klar_interp::AxisLetter;
 use serde::Serialize;
 use std::path::{Path, PathBuf};
@@ -17,6 +17,12 @@ use tokio::sync::broadcast;
 
 /// Wall time between two published snapshots while a program runs.
 const PUBLISH_PERIOD: Duration = Duration::from_millis(40);
+
+/// Wall time between two snapshots while idle.
+const IDLE_PUBLISH_PERIOD: Duration = Duration::from_millis(500);
+
+/// Longest the idle loop waits for a command before it looks at the operator's stop.
+const IDLE_POLL: Duration = Duration::from_millis(100);
 
 /// Machine time between two points of the executed-path trail, s.
 const TRAIL_PERIOD: f64 = 0.005;
@@ -115,6 +121,8 @@ pub struct MachineLoop {
     snap: Snapshot,
     program_path: Option<PathBuf>,
     feed_override: f64,
+    /// The operator's stop from outside (signals): ends a running program and the loop.
+    stop: OperatorStop,
 }
 
 /// Finite differences of the commanded positions, one servo cycle apart.
@@ -181,20 +189,35 @@ impl MachineLoop {
             snap,
             program_path: None,
             feed_override: 1.0,
+            stop: OperatorStop::new(),
         }
     }
 
-    /// Serves commands until every sender is gone.
+    /// Makes the loop watch `stop`: a request stops a running program under control (a
+    /// second one with a quick stop) and then ends the loop.
+    pub fn with_operator_stop(mut self, stop: OperatorStop) -> Self {
+        self.stop = stop;
+        self
+    }
+
+    /// Serves commands until every sender is gone or the operator's stop is requested.
     pub fn run(mut self) {
         self.publish();
-        loop {
-            match self.commands.recv_timeout(Duration::from_millis(500)) {
+        let mut last_publish = Instant::now();
+        while self.stop.level() == StopLevel::None {
+            match self.commands.recv_timeout(IDLE_POLL) {
                 Ok(Command::Start) => self.run_program(),
                 Ok(other) => self.idle_command(other),
-                Err(RecvTimeoutError::Timeout) => self.publish(),
+                Err(RecvTimeoutError::Timeout) => {
+                    if last_publish.elapsed() >= IDLE_PUBLISH_PERIOD {
+                        self.publish();
+                        last_publish = Instant::now();
+                    }
+                }
                 Err(RecvTimeoutError::Disconnected) => return,
             }
         }
+        tracing::info!("machine loop ended by the operator's stop");
     }
 
     fn idle_command(&mut self, command: Command) {
@@ -252,6 +275,7 @@ impl MachineLoop {
             }
         };
         run.set_feed_override(self.feed_override);
+        run.watch_operator_stop(self.stop.clone());
         tracing::info!(program = %path.display(), "run started");
         let mut derivatives = Derivatives::new(run.letters().len());
         let mut first = true;
@@ -346,6 +370,7 @@ impl MachineLoop {
         let (state, message) = match &error {
             None => (MachineState::Finished, None),
             Some(RunError::Stopped { .. }) => (MachineState::Stopped, None),
+            Some(e @ RunError::Operator { .. }) => (MachineState::Stopped, Some(e.to_string())),
             Some(e @ (RunError::Fault { .. } | RunError::Spindle { .. })) => {
                 (MachineState::Fault, Some(e.to_string()))
             }
