@@ -109,12 +109,13 @@ impl Run<'_, '_> {
             if let Err(e) = self.record_cycle(t) {
                 tracing::warn!("stop on the path: trace: {e}");
             }
-            let moved = self
-                .actual
-                .iter()
-                .zip(&last)
-                .any(|(a, b)| (a - b).abs() > REST_STEP);
-            last.clone_from(&self.actual);
+            let mut moved = false;
+            for (a, b) in self.actual.iter().zip(last.iter_mut()) {
+                if (a - *b).abs() > REST_BAND {
+                    *b = *a;
+                    moved = true;
+                }
+            }
             still = if moved { 0 } else { still + 1 };
         }
     }
