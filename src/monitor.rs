@@ -161,6 +161,8 @@ pub enum StopCause {
         /// The machine's limit, s.
         limit: f64,
     },
+    /// The setpoint guard refused a commanded setpoint (it was not sent).
+    Setpoint(crate::runtime::guard::Violation),
     /// The operator asked for a stop.
     Requested,
 }
@@ -181,6 +183,7 @@ impl fmt::Display for StopCause {
                 late * 1e3,
                 limit * 1e3
             ),
+            StopCause::Setpoint(v) => write!(f, "setpoint refused: {v}"),
             StopCause::Requested => write!(f, "stop requested"),
         }
     }

@@ -20,20 +20,20 @@
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
+pub(crate) mod command;
+mod events;
+pub mod guard;
 mod stop;
 pub(crate) mod stream;
 
 use crate::config::MachineConfig;
 use crate::machine::{MachineError, MachineIo};
 use crate::monitor::{StopCause, StopReport};
-use crate::testrun::{
-    block_diagnostic, check_positioning, check_travel, moves_positioning_axis, positioning_axes,
-};
+use crate::testrun::{check_positioning, check_travel, planner_ops, positioning_axes};
 use crate::trace::TraceWriter;
-use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
-use klar_interp::{AxisLetter, Diagnostic, Op, OpKind, SourceLoc};
-use klar_motion::kinematics::Kinematics;
-use klar_motion::{AxisFault, BackendError, MotionError, Planner, Sample, Setpoint, Step};
+use command::CommandPath;
+use klar_interp::{AxisLetter, Diagnostic, Op, SourceLoc};
+use klar_motion::{AxisFault, BackendError, MotionError, Planner, Sample, Step};
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
@@ -120,6 +120,16 @@ pub enum RunError {
         /// Program line being executed.
         line: u32,
     },
+    /// The setpoint guard refused a commanded setpoint (a step beyond the axis's velocity or
+    /// acceleration limit, or outside its travel): it was not sent, the axes were brought to
+    /// rest with a quick stop from the last good setpoint.
+    #[error("{diagnostic}")]
+    Setpoint {
+        /// Where (`file:line:col`, block) and what.
+        diagnostic: Diagnostic,
+        /// The refused step.
+        violation: guard::Violation,
+    },
     /// The run was stopped on request (after a feed hold brought it to rest).
     #[error("stopped on request (at line {line})")]
     Stopped {
@@ -154,9 +164,8 @@ pub struct Run<'a, 'w> {
     config: &'a MachineConfig,
     letters: Vec<AxisLetter>,
     travel: Vec<[f64; 2]>,
-    kin: Box<dyn Kinematics>,
-    /// TCPM is on: the velocity and acceleration feed-forward go through the kinematics.
-    tcpm: bool,
+    /// Samples → kinematics → guarded setpoints (shared with the test run).
+    command: CommandPath,
     io: MachineIo,
     ops: OpStream,
     planner: Planner,
@@ -360,30 +369,21 @@ impl Run<'_, '_> {
             self.last_loc = Some(sample.loc);
         }
         self.line = sample.loc.line;
-        self.kin.to_machine(&sample.pose, &mut self.commanded);
-        // Under TCPM the machine rates are the kinematics' Jacobian applied to the program
-        // rates (the acceleration without the Jacobian's own rate of change).
-        let (mut vel, mut acc) = ([0.0; 9], [0.0; 9]);
-        if self.tcpm {
-            self.kin
-                .rates_to_machine(&sample.pose, &sample.velocity, &mut vel);
-            self.kin
-                .rates_to_machine(&sample.pose, &sample.acceleration, &mut acc);
+        // The last line of defence: a setpoint the guard refuses never reaches a backend.
+        let t = sample.t + self.shift;
+        let positions =
+            self.command
+                .positions(sample, t)
+                .map_err(|violation| RunError::Setpoint {
+                    diagnostic: command::refused_in_run(self.path, sample.loc, &violation),
+                    violation,
+                })?;
+        for (c, &x) in self.commanded.iter_mut().zip(positions) {
+            *c = x;
         }
-        for (i, sp) in self.io.setpoints_mut().iter_mut().enumerate() {
-            let l = self.letters[i];
-            let (v, a) = if self.tcpm {
-                (vel.get(i).copied(), acc.get(i).copied())
-            } else {
-                (None, None)
-            };
-            *sp = Setpoint {
-                position: self.commanded[i],
-                velocity: v.unwrap_or(sample.velocity[l.index()]),
-                acceleration: a.unwrap_or(sample.acceleration[l.index()]),
-            };
-        }
-        self.servo_cycle(sample.t + self.shift)
+        self.command
+            .setpoints(sample, &self.commanded, self.io.setpoints_mut());
+        self.servo_cycle(t)
     }
 
     /// Holds until every positioning axis (one that follows its own profile behind a slow
@@ -412,148 +412,10 @@ impl Run<'_, '_> {
     /// One cycle holding the last commanded position; planner time stands still.
     fn hold_cycle(&mut self) -> Result<(), RunError> {
         self.io.hold();
+        self.command.repeat();
         let period = self.config.servo_period;
         self.shift += period;
         self.servo_cycle(self.t + period)
-    }
-
-    /// A non-motion op reaching the servo loop.
-    fn handle_event(&mut self, op: &Op) -> Result<(), RunError> {
-        match &op.kind {
-            OpKind::Spindle {
-                spindle: SpindleId::Main,
-                dir,
-                speed,
-            } => self.spindle_command(op.loc, *dir, *speed),
-            OpKind::Tcpm { on, .. } => {
-                // From here on X Y Z of the samples are the tool tip on the workpiece (on) or
-                // the machine's own X Y Z (off).
-                self.kin.set_tcpm(*on);
-                self.tcpm = *on;
-                Ok(())
-            }
-            OpKind::Stop { optional } => {
-                // A run without an operator cannot wait for a restart: it logs and goes on.
-                tracing::info!(
-                    line = op.loc.line,
-                    optional,
-                    "program stop (no operator: continuing)"
-                );
-                Ok(())
-            }
-            OpKind::MachineFunction { number, stop, wait } => {
-                // The simulated machine has nothing to switch: the function is logged; the
-                // planner has already stopped the path and holds it for `wait`.
-                tracing::info!(
-                    line = op.loc.line,
-                    number,
-                    name = self.config.machine_function_name(*number),
-                    stop,
-                    wait,
-                    "machine function M{number}"
-                );
-                Ok(())
-            }
-            other => {
-                tracing::debug!(line = op.loc.line, ?other, "event");
-                Ok(())
-            }
-        }
-    }
-
-    /// The main spindle speed for constant surface speed `v` (m/min) at the tool's present
-    /// radius (program X), limited to the machine's maximum.
-    fn surface_speed_rpm(&mut self, v: f64) -> f64 {
-        let radius = self.kin.to_program(&self.commanded)[AxisLetter::X];
-        let max = self.io.spindle_mut().map_or(0.0, |s| s.max_rpm);
-        OpStream::surface_speed_rpm(v, radius, max)
-    }
-
-    /// Under constant surface speed, follows the tool's radius block by block (without
-    /// waiting: the spindle changes speed while the axes move, as on a lathe).
-    fn follow_surface_speed(&mut self) -> Result<(), RunError> {
-        let Some(v) = self.surface_speed else {
-            return Ok(());
-        };
-        let rpm = self.surface_speed_rpm(v);
-        if let Some(s) = self.io.spindle_mut() {
-            let now = s.commanded();
-            if now != 0.0 && (rpm - now.abs()).abs() > 0.01 * now.abs() {
-                s.command(rpm.copysign(now))?;
-            }
-        }
-        Ok(())
-    }
-
-    fn diagnostic(&self, loc: SourceLoc, message: String) -> RunError {
-        RunError::Program(block_diagnostic(self.path, loc, message))
-    }
-
-    fn spindle_command(
-        &mut self,
-        loc: SourceLoc,
-        dir: SpindleDir,
-        speed: SpindleSpeed,
-    ) -> Result<(), RunError> {
-        let rpm = match speed {
-            SpindleSpeed::Rpm(r) => {
-                self.surface_speed = None;
-                r
-            }
-            SpindleSpeed::SurfaceSpeed(v) => {
-                self.surface_speed = (dir != SpindleDir::Off).then_some(v);
-                self.surface_speed_rpm(v)
-            }
-        };
-        let signed = match dir {
-            SpindleDir::Cw => rpm,
-            SpindleDir::Ccw => -rpm,
-            SpindleDir::Off => 0.0,
-        };
-        let Some(spindle) = self.io.spindle_mut() else {
-            if signed != 0.0 && !self.warned_no_spindle {
-                tracing::warn!(
-                    line = loc.line,
-                    "this machine has no spindle: S/M3/M4 ignored"
-                );
-                self.warned_no_spindle = true;
-            }
-            return Ok(());
-        };
-        if signed.abs() > spindle.max_rpm {
-            let max = spindle.max_rpm;
-            return Err(self.diagnostic(
-                loc,
-                format!("spindle speed S{rpm} is above this machine's {max} rpm"),
-            ));
-        }
-        if signed == spindle.commanded() {
-            return Ok(());
-        }
-        spindle.command(signed)?;
-        let timeout = spindle.at_speed_timeout;
-        if signed == 0.0 {
-            return Ok(());
-        }
-        let waited_from = self.t;
-        loop {
-            self.hold_cycle()?;
-            if let Some(pending) = self.stopping.take() {
-                return Err(self.end_path_stop(pending));
-            }
-            let at_speed = self.io.spindle_mut().is_some_and(|s| s.feedback().at_speed);
-            if at_speed {
-                break;
-            }
-            if self.t - waited_from > timeout {
-                return Err(RunError::Spindle {
-                    message: format!("did not reach {signed} rpm within {timeout} s"),
-                    line: loc.line,
-                });
-            }
-        }
-        self.report.spindle_wait += self.t - waited_from;
-        Ok(())
     }
 }
 
@@ -629,7 +491,6 @@ impl<'a, 'w> Run<'a, 'w> {
         } else if let Err(diags) = klar_interp::syntax_check(path) {
             return Err(fail(RunError::Syntax(diags), &report));
         }
-        let kin = config.kinematics();
         let mut io = MachineIo::open(config).map_err(|e| fail(e.into(), &report))?;
         if let Some(sim) = io.sim_axes() {
             sim.schedule(&config.faults).map_err(|e| {
@@ -640,7 +501,14 @@ impl<'a, 'w> Run<'a, 'w> {
                 fail(e.into(), &report)
             })?;
         }
-        let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
+        let at: Vec<f64> = io.feedback().iter().map(|f| f.position).collect();
+        let command = CommandPath::new(config, &at)
+            .with_jumps(config)
+            .map_err(|e| {
+                let (what, message) = ("fault injection".into(), e.to_string());
+                fail(MachineError::Open { what, message }.into(), &report)
+            })?;
+        let start = command.kinematics().to_program(&at);
         let interp = config
             .open_program(path, start)
             .map_err(|d| fail(RunError::Program(d), &report))?;
@@ -684,8 +552,7 @@ impl<'a, 'w> Run<'a, 'w> {
             path,
             config,
             travel: config.axes.iter().map(|a| a.travel).collect(),
-            kin,
-            tcpm: false,
+            command,
             io,
             ops,
             planner,
@@ -764,7 +631,9 @@ impl<'a, 'w> Run<'a, 'w> {
             Some(Step::Event(op)) => self.handle_event(&op).map(|()| true),
         };
         match result {
-            Err(e @ (RunError::Fault { .. } | RunError::Backend(_))) => Err(self.quick_stop(e)),
+            Err(
+                e @ (RunError::Fault { .. } | RunError::Backend(_) | RunError::Setpoint { .. }),
+            ) => Err(self.quick_stop(e)),
             other => other,
         }
     }
@@ -872,17 +741,8 @@ impl<'a, 'w> Run<'a, 'w> {
                     })
                     .map_err(RunError::Program)
                     .map(|()| {
-                        // A positioning axis moves between exact stops, so the path comes
-                        // to rest before and after its block.
-                        let isolate = moves_positioning_axis(&op, &self.letters, &self.positioning);
-                        if isolate {
-                            self.queue.push_back(exact_stop(op.loc));
-                        }
-                        let loc = op.loc;
-                        self.queue.push_back(op);
-                        if isolate {
-                            self.queue.push_back(exact_stop(loc));
-                        }
+                        let ops = planner_ops(op, &self.letters, &self.positioning);
+                        self.queue.extend(ops);
                     }),
                 Some(Err(e)) => Err(e),
                 None => {
@@ -903,12 +763,5 @@ impl<'a, 'w> Run<'a, 'w> {
         self.pending_error = Some(error);
         self.planner.finish();
         self.input_done = true;
-    }
-}
-
-fn exact_stop(loc: SourceLoc) -> Op {
-    Op {
-        kind: OpKind::ExactStop,
-        loc,
     }
 }

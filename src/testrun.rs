@@ -481,7 +481,7 @@ pub(crate) fn block_diagnostic(path: &Path, loc: SourceLoc, message: String) -> 
 }
 
 /// True when a motion op moves a positioning-only axis.
-pub(crate) fn moves_positioning_axis(
+fn moves_positioning_axis(
     op: &Op,
     letters: &[AxisLetter],
     positioning: &[Option<(f64, f64)>],
@@ -493,6 +493,20 @@ pub(crate) fn moves_positioning_axis(
         .iter()
         .zip(positioning)
         .any(|(l, p)| p.is_some() && hi[*l] - lo[*l] > 1e-12)
+}
+
+/// The ops the planner gets for `op`, as a run feeds them: a move of a positioning-only axis
+/// comes between two exact stops, so the path is at rest before and after its block.
+pub(crate) fn planner_ops(
+    op: Op,
+    letters: &[AxisLetter],
+    positioning: &[Option<(f64, f64)>],
+) -> impl Iterator<Item = Op> + use<> {
+    let stop = moves_positioning_axis(&op, letters, positioning).then_some(Op {
+        kind: OpKind::ExactStop,
+        loc: op.loc,
+    });
+    [stop.clone(), Some(op), stop].into_iter().flatten()
 }
 
 /// Refuses a motion op that moves a positioning-only axis together with another axis: such an

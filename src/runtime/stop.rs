@@ -102,6 +102,9 @@ impl Run<'_, '_> {
                 (cause, Some(*axis))
             }
             RunError::Backend(e) => (StopCause::Communication(e.to_string()), None),
+            RunError::Setpoint { violation, .. } => {
+                (StopCause::Setpoint(*violation), Some(violation.axis()))
+            }
             other => (StopCause::Program(other.to_string()), None),
         };
         tracing::error!(line = self.line, "{cause}: quick stop");
