@@ -1,6 +1,10 @@
 //! From planner samples to the commanded machine-axis setpoints, as a run sends them to the
 //! backends: the kinematics (with TCPM switched by the planner's events), the velocity and
 //! acceleration feed-forward, and the setpoint guard ([`super::guard`]) over every position.
+//!
+//! The run ([`super::Run`]) and the test run ([`crate::testrun`]) both go through
+//! [`CommandPath`], so the test run follows the very trajectory the run will command and
+//! refuses, before anything moves, every setpoint the run's guard would stop at.
 
 use super::guard::{GuardAxis, SetpointGuard, Violation};
 use crate::config::{AxisKind, BackendConfig, MachineConfig};
@@ -132,6 +136,15 @@ impl CommandPath {
     pub(crate) fn repeat(&mut self) {
         self.guard.repeat();
     }
+}
+
+/// The test run's diagnostic for a setpoint the guard refuses, at its block.
+pub(crate) fn refused_in_check(path: &Path, loc: SourceLoc, v: &Violation) -> Diagnostic {
+    block_diagnostic(
+        path,
+        loc,
+        format!("setpoint guard: {v} (the run would stop here)"),
+    )
 }
 
 /// The run's diagnostic for a setpoint the guard refused, at its block.
