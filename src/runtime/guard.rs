@@ -139,6 +139,11 @@ pub enum Violation {
     },
 }
 
+/// `x ≤ limit`, false when either is NaN: a NaN limit (a broken machine file) refuses.
+fn within(x: f64, limit: f64) -> bool {
+    x <= limit
+}
+
 fn unit(rotary: bool) -> &'static str {
     if rotary { "deg" } else { "mm" }
 }
@@ -220,7 +225,7 @@ impl SetpointGuard {
         }
         for (a, &p) in axes() {
             let [min, max] = a.travel;
-            if p < min - TRAVEL_EPSILON || p > max + TRAVEL_EPSILON {
+            if !(within(min - TRAVEL_EPSILON, p) && within(p, max + TRAVEL_EPSILON)) {
                 return Some(Violation::Travel {
                     axis: a.letter,
                     rotary: a.rotary,
@@ -240,8 +245,7 @@ impl SetpointGuard {
         for ((a, &p), &l) in axes().zip(&self.last) {
             let step = (p - l).abs();
             let limit = VELOCITY_MARGIN * a.max_velocity * t + STEP_EPSILON;
-            // Written so that a NaN limit (a broken machine file) refuses too.
-            if !(step <= limit) {
+            if !within(step, limit) {
                 let v = Violation::Velocity {
                     axis: a.letter,
                     rotary: a.rotary,
@@ -259,7 +263,7 @@ impl SetpointGuard {
         for (((a, &p), &l), &b) in axes().zip(&self.last).zip(&self.before) {
             let change = (p - 2.0 * l + b).abs();
             let limit = ACCELERATION_MARGIN * a.max_acceleration * t * t + STEP_EPSILON;
-            if !(change <= limit) {
+            if !within(change, limit) {
                 let v = Violation::Acceleration {
                     axis: a.letter,
                     rotary: a.rotary,
@@ -391,6 +395,12 @@ mod tests {
         // On the limit (and within its rounding slack) is within the travel.
         let mut g = SetpointGuard::new(g.axes.clone(), T, &[100.0, 0.0]);
         assert_eq!(g.check(&[100.0 + 1e-9, 0.0]), Ok(()));
+        // A limit that is not a number refuses every step.
+        g.axes[0].max_velocity = f64::NAN;
+        assert!(matches!(
+            g.check(&[100.0, 0.0]),
+            Err(Violation::Velocity { .. })
+        ));
     }
 
     #[test]
