@@ -36,7 +36,15 @@ pub enum FaultKind {
     Stall,
     /// The simulated spindle drive faults (fault `code`, default 1).
     Spindle,
+    /// One commanded sample of a simulated axis is offset by `offset` (mm or degrees,
+    /// default [`DEFAULT_JUMP_OFFSET`]) before the setpoint guard sees it: a planner jump, to
+    /// test that the guard keeps it from the backend. Not an axis fault: the runtime handles
+    /// it.
+    Jump,
 }
+
+/// Offset of a `jump` fault when the entry gives none, mm or degrees.
+pub const DEFAULT_JUMP_OFFSET: f64 = 1.0;
 
 /// Default length of a `stall` fault when the entry gives none, s.
 pub const DEFAULT_STALL_SECONDS: f64 = 0.05;
@@ -52,6 +60,7 @@ impl FaultKind {
             "estop" => FaultKind::Estop,
             "stall" => FaultKind::Stall,
             "spindle" => FaultKind::Spindle,
+            "jump" => FaultKind::Jump,
             _ => return None,
         })
     }
@@ -77,6 +86,10 @@ pub struct FaultConfig {
     /// How late the setpoint comes, s (`stall` only; default [`DEFAULT_STALL_SECONDS`]).
     #[serde(default)]
     pub duration: Option<f64>,
+    /// How far the commanded sample is offset, mm or degrees (`jump` only; default
+    /// [`DEFAULT_JUMP_OFFSET`]).
+    #[serde(default)]
+    pub offset: Option<f64>,
 }
 
 /// Why a fault specification is not usable.
@@ -86,7 +99,9 @@ pub enum FaultSpecError {
     #[error("fault `{0}`: expected KIND[:AXIS]@SECONDS, e.g. drive:X@0.5 or estop@1.2")]
     Form(String),
     /// Unknown kind.
-    #[error("fault `{0}`: unknown kind (drive, comm, noise, stuck, limit, estop, stall, spindle)")]
+    #[error(
+        "fault `{0}`: unknown kind (drive, comm, noise, stuck, limit, estop, stall, spindle, jump)"
+    )]
     Kind(String),
     /// The time is not a finite number >= 0.
     #[error("fault `{0}`: the time must be a number of seconds >= 0")]
@@ -139,13 +154,14 @@ impl FromStr for FaultConfig {
             code: None,
             amplitude: None,
             duration: None,
+            offset: None,
         })
     }
 }
 
 impl FaultConfig {
     /// The fault as the simulator injects it; `None` for a fault of the runtime itself
-    /// (`stall`).
+    /// (`stall`, `spindle`, `jump`).
     pub fn injected(&self) -> Option<InjectedFault> {
         Some(match self.kind {
             FaultKind::Drive => InjectedFault::Drive {
@@ -158,13 +174,18 @@ impl FaultConfig {
             FaultKind::Stuck => InjectedFault::Stuck,
             FaultKind::Limit => InjectedFault::LimitSwitch,
             FaultKind::Estop => InjectedFault::EStop,
-            FaultKind::Stall | FaultKind::Spindle => return None,
+            FaultKind::Stall | FaultKind::Spindle | FaultKind::Jump => return None,
         })
     }
 
     /// The length of a `stall` fault, s.
     pub fn stall_seconds(&self) -> f64 {
         self.duration.unwrap_or(DEFAULT_STALL_SECONDS)
+    }
+
+    /// The offset of a `jump` fault, mm or degrees.
+    pub fn jump_offset(&self) -> f64 {
+        self.offset.unwrap_or(DEFAULT_JUMP_OFFSET)
     }
 }
 
@@ -218,6 +239,17 @@ impl SimAxes {
     pub fn schedule(&self, faults: &[FaultConfig]) -> Result<(), FaultSpecError> {
         let mut entries = Vec::new();
         for f in faults {
+            if f.kind == FaultKind::Jump {
+                // A jump offsets a commanded sample: only of a simulated axis, never of a
+                // real drive.
+                match f.axis {
+                    None => return Err(FaultSpecError::NeedsAxis(f.kind, f.at)),
+                    Some(l) if self.index_of(l).is_none() => {
+                        return Err(FaultSpecError::NotSimulated(f.kind, f.at, l));
+                    }
+                    Some(_) => {}
+                }
+            }
             let Some(fault) = f.injected() else {
                 continue;
             };

@@ -455,3 +455,66 @@ impl MachineIo {
         self.spindle.as_mut()
     }
 }
+
+/// What a recording backend saw: (time, machine axis, setpoint) per axis and cycle.
+#[cfg(test)]
+pub(crate) type Recorded = std::sync::Arc<std::sync::Mutex<Vec<(f64, usize, Setpoint)>>>;
+
+/// A backend that hands everything on to the backend it wraps and records each setpoint it
+/// was given (tests only: what the backends really received).
+#[cfg(test)]
+struct Recording {
+    inner: Box<dyn AxisBackend>,
+    axes: Vec<usize>,
+    seen: Recorded,
+}
+
+#[cfg(test)]
+impl AxisBackend for Recording {
+    fn axis_count(&self) -> usize {
+        self.inner.axis_count()
+    }
+    fn enable(&mut self) -> Result<(), BackendError> {
+        self.inner.enable()
+    }
+    fn disable(&mut self) -> Result<(), BackendError> {
+        self.inner.disable()
+    }
+    fn start_homing(&mut self, axis: usize) -> Result<(), BackendError> {
+        self.inner.start_homing(axis)
+    }
+    fn reset_fault(&mut self, axis: usize) -> Result<(), BackendError> {
+        self.inner.reset_fault(axis)
+    }
+    fn cycle(
+        &mut self,
+        t: f64,
+        setpoints: &[Setpoint],
+        feedback: &mut [AxisFeedback],
+    ) -> Result<(), BackendError> {
+        if let Ok(mut seen) = self.seen.lock() {
+            seen.extend(self.axes.iter().zip(setpoints).map(|(&i, sp)| (t, i, *sp)));
+        }
+        self.inner.cycle(t, setpoints, feedback)
+    }
+}
+
+#[cfg(test)]
+impl MachineIo {
+    /// Wraps every axis backend in a recorder of the setpoints it receives from now on.
+    pub(crate) fn record(&mut self) -> Recorded {
+        let seen = Recorded::default();
+        for slot in &mut self.slots {
+            let inner = std::mem::replace(
+                &mut slot.backend,
+                Box::new(klar_sim::axis::SimBackend::new(Vec::new(), 0.001)),
+            );
+            slot.backend = Box::new(Recording {
+                inner,
+                axes: slot.axes.clone(),
+                seen: seen.clone(),
+            });
+        }
+        seen
+    }
+}

@@ -390,7 +390,9 @@ fn cmd_run(
     if let Some(e) = &error {
         match e {
             RunError::Syntax(diags) => print_diagnostics(diags),
-            RunError::Program(d) => print_diagnostics(std::slice::from_ref(d)),
+            RunError::Program(d) | RunError::Setpoint { diagnostic: d, .. } => {
+                print_diagnostics(std::slice::from_ref(d))
+            }
             other => eprintln!("{}: {other}", program.display()),
         }
     }

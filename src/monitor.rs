@@ -200,6 +200,8 @@ pub enum StopCause {
         /// The machine's limit, s.
         limit: f64,
     },
+    /// The setpoint guard refused a commanded setpoint (it was not sent).
+    Setpoint(crate::runtime::guard::Violation),
     /// The operator asked for a stop.
     Requested,
     /// The operator stopped the run from outside (a signal to `klar run` or `klar serve`).
@@ -222,6 +224,7 @@ impl fmt::Display for StopCause {
                 late * 1e3,
                 limit * 1e3
             ),
+            StopCause::Setpoint(v) => write!(f, "setpoint refused: {v}"),
             StopCause::Requested => write!(f, "stop requested"),
             StopCause::Operator => write!(f, "stopped by the operator"),
         }

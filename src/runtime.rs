@@ -24,7 +24,10 @@
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
+pub(crate) mod command;
 mod error;
+mod events;
+pub mod guard;
 mod operator;
 mod spindle;
 mod stop;
@@ -33,15 +36,12 @@ pub(crate) mod stream;
 use crate::config::MachineConfig;
 use crate::machine::{MachineError, MachineIo};
 use crate::monitor::{StopCause, StopReport};
-use crate::testrun::{
-    block_diagnostic, check_positioning, check_travel, moves_positioning_axis, positioning_axes,
-};
+use crate::testrun::{check_positioning, check_travel, planner_ops, positioning_axes};
 use crate::trace::TraceWriter;
+use command::CommandPath;
 pub use error::RunError;
-use klar_interp::op::SpindleId;
-use klar_interp::{AxisLetter, Op, OpKind, SourceLoc};
-use klar_motion::kinematics::Kinematics;
-use klar_motion::{AxisFault, Planner, Sample, Setpoint, Step};
+use klar_interp::{AxisLetter, Op, SourceLoc};
+use klar_motion::{AxisFault, Planner, Sample, Step};
 pub use operator::{OperatorStop, StopLevel};
 use std::collections::VecDeque;
 use std::io::Write;
@@ -97,9 +97,8 @@ pub struct Run<'a, 'w> {
     config: &'a MachineConfig,
     letters: Vec<AxisLetter>,
     travel: Vec<[f64; 2]>,
-    kin: Box<dyn Kinematics>,
-    /// TCPM is on: the velocity and acceleration feed-forward go through the kinematics.
-    tcpm: bool,
+    /// Samples → kinematics → guarded setpoints (shared with the test run).
+    command: CommandPath,
     io: MachineIo,
     ops: OpStream,
     planner: Planner,
@@ -287,30 +286,21 @@ impl Run<'_, '_> {
             self.last_loc = Some(sample.loc);
         }
         self.line = sample.loc.line;
-        self.kin.to_machine(&sample.pose, &mut self.commanded);
-        // Under TCPM the machine rates are the kinematics' Jacobian applied to the program
-        // rates (the acceleration without the Jacobian's own rate of change).
-        let (mut vel, mut acc) = ([0.0; 9], [0.0; 9]);
-        if self.tcpm {
-            self.kin
-                .rates_to_machine(&sample.pose, &sample.velocity, &mut vel);
-            self.kin
-                .rates_to_machine(&sample.pose, &sample.acceleration, &mut acc);
+        // The last line of defence: a setpoint the guard refuses never reaches a backend.
+        let t = sample.t + self.shift;
+        let positions =
+            self.command
+                .positions(sample, t)
+                .map_err(|violation| RunError::Setpoint {
+                    diagnostic: command::refused_in_run(self.path, sample.loc, &violation),
+                    violation,
+                })?;
+        for (c, &x) in self.commanded.iter_mut().zip(positions) {
+            *c = x;
         }
-        for (i, sp) in self.io.setpoints_mut().iter_mut().enumerate() {
-            let l = self.letters[i];
-            let (v, a) = if self.tcpm {
-                (vel.get(i).copied(), acc.get(i).copied())
-            } else {
-                (None, None)
-            };
-            *sp = Setpoint {
-                position: self.commanded[i],
-                velocity: v.unwrap_or(sample.velocity[l.index()]),
-                acceleration: a.unwrap_or(sample.acceleration[l.index()]),
-            };
-        }
-        self.servo_cycle(sample.t + self.shift)
+        self.command
+            .setpoints(sample, &self.commanded, self.io.setpoints_mut());
+        self.servo_cycle(t)
     }
 
     /// Holds until every positioning axis (one that follows its own profile behind a slow
@@ -339,57 +329,10 @@ impl Run<'_, '_> {
     /// One cycle holding the last commanded position; planner time stands still.
     fn hold_cycle(&mut self) -> Result<(), RunError> {
         self.io.hold();
+        self.command.repeat();
         let period = self.config.servo_period;
         self.shift += period;
         self.servo_cycle(self.t + period)
-    }
-
-    /// A non-motion op reaching the servo loop.
-    fn handle_event(&mut self, op: &Op) -> Result<(), RunError> {
-        match &op.kind {
-            OpKind::Spindle {
-                spindle: SpindleId::Main,
-                dir,
-                speed,
-            } => self.spindle_command(op.loc, *dir, *speed),
-            OpKind::Tcpm { on, .. } => {
-                // From here on X Y Z of the samples are the tool tip on the workpiece (on) or
-                // the machine's own X Y Z (off).
-                self.kin.set_tcpm(*on);
-                self.tcpm = *on;
-                Ok(())
-            }
-            OpKind::Stop { optional } => {
-                // A run without an operator cannot wait for a restart: it logs and goes on.
-                tracing::info!(
-                    line = op.loc.line,
-                    optional,
-                    "program stop (no operator: continuing)"
-                );
-                Ok(())
-            }
-            OpKind::MachineFunction { number, stop, wait } => {
-                // The simulated machine has nothing to switch: the function is logged; the
-                // planner has already stopped the path and holds it for `wait`.
-                tracing::info!(
-                    line = op.loc.line,
-                    number,
-                    name = self.config.machine_function_name(*number),
-                    stop,
-                    wait,
-                    "machine function M{number}"
-                );
-                Ok(())
-            }
-            other => {
-                tracing::debug!(line = op.loc.line, ?other, "event");
-                Ok(())
-            }
-        }
-    }
-
-    fn diagnostic(&self, loc: SourceLoc, message: String) -> RunError {
-        RunError::Program(block_diagnostic(self.path, loc, message))
     }
 }
 
@@ -465,7 +408,6 @@ impl<'a, 'w> Run<'a, 'w> {
         } else if let Err(diags) = klar_interp::syntax_check(path) {
             return Err(fail(RunError::Syntax(diags), &report));
         }
-        let kin = config.kinematics();
         let mut io = MachineIo::open(config).map_err(|e| fail(e.into(), &report))?;
         if let Some(sim) = io.sim_axes() {
             sim.schedule(&config.faults).map_err(|e| {
@@ -476,7 +418,14 @@ impl<'a, 'w> Run<'a, 'w> {
                 fail(e.into(), &report)
             })?;
         }
-        let start = kin.to_program(&io.feedback().iter().map(|f| f.position).collect::<Vec<_>>());
+        let at: Vec<f64> = io.feedback().iter().map(|f| f.position).collect();
+        let command = CommandPath::new(config, &at)
+            .with_jumps(config)
+            .map_err(|e| {
+                let (what, message) = ("fault injection".into(), e.to_string());
+                fail(MachineError::Open { what, message }.into(), &report)
+            })?;
+        let start = command.kinematics().to_program(&at);
         let interp = config
             .open_program(path, start)
             .map_err(|d| fail(RunError::Program(d), &report))?;
@@ -520,8 +469,7 @@ impl<'a, 'w> Run<'a, 'w> {
             path,
             config,
             travel: config.axes.iter().map(|a| a.travel).collect(),
-            kin,
-            tcpm: false,
+            command,
             io,
             ops,
             planner,
@@ -602,7 +550,9 @@ impl<'a, 'w> Run<'a, 'w> {
             Some(Step::Event(op)) => self.handle_event(&op).map(|()| true),
         };
         match result {
-            Err(e @ (RunError::Fault { .. } | RunError::Backend(_))) => Err(self.quick_stop(e)),
+            Err(
+                e @ (RunError::Fault { .. } | RunError::Backend(_) | RunError::Setpoint { .. }),
+            ) => Err(self.quick_stop(e)),
             other => other,
         }
     }
@@ -710,17 +660,8 @@ impl<'a, 'w> Run<'a, 'w> {
                     })
                     .map_err(RunError::Program)
                     .map(|()| {
-                        // A positioning axis moves between exact stops, so the path comes
-                        // to rest before and after its block.
-                        let isolate = moves_positioning_axis(&op, &self.letters, &self.positioning);
-                        if isolate {
-                            self.queue.push_back(exact_stop(op.loc));
-                        }
-                        let loc = op.loc;
-                        self.queue.push_back(op);
-                        if isolate {
-                            self.queue.push_back(exact_stop(loc));
-                        }
+                        let ops = planner_ops(op, &self.letters, &self.positioning);
+                        self.queue.extend(ops);
                     }),
                 Some(Err(e)) => Err(e),
                 None => {
@@ -741,12 +682,5 @@ impl<'a, 'w> Run<'a, 'w> {
         self.pending_error = Some(error);
         self.planner.finish();
         self.input_done = true;
-    }
-}
-
-fn exact_stop(loc: SourceLoc) -> Op {
-    Op {
-        kind: OpKind::ExactStop,
-        loc,
     }
 }

@@ -6,6 +6,13 @@
 //! refuses (contour and compensation violations), positioning axes programmed together with
 //! others, and feeds the axes cannot reach (a warning: the control limits them).
 //!
+//! The planner pass follows the run's own commanded trajectory: the ops reach the planner as
+//! the run feeds them, and every sample goes through the run's command path
+//! ([`crate::runtime::command::CommandPath`]: kinematics with TCPM switched by the planner's
+//! events, then the setpoint guard of [`crate::runtime::guard`]), so a step beyond an axis's
+//! velocity or acceleration limit, or a setpoint outside its travel, that would stop the run
+//! is refused here first, at its block and line.
+//!
 //! What it cannot decide statically is listed too: after the first interpreter error the
 //! program's later positions depend on how the error is resolved, so the machine checks stop
 //! there; without a tool table, tool existence is not checked. `klar run` refuses to start a
@@ -14,6 +21,8 @@
 use crate::bounds::op_bounds;
 use crate::config::{BackendConfig, MachineConfig};
 use crate::runtime::RunError;
+use crate::runtime::command::{CommandPath, refused_in_check};
+use crate::runtime::guard::Violation;
 use crate::runtime::stream::OpStream;
 use klar_interp::op::{SpindleDir, SpindleSpeed};
 use klar_interp::{AxisLetter, Diagnostic, Feed, Op, OpKind, Pose, SourceLoc};
@@ -174,6 +183,8 @@ struct MachineChecks<'a> {
     outside: Vec<Option<f64>>,
     positioning: Vec<Option<(f64, f64)>>,
     planner: Option<Planner>,
+    /// The run's command path over the planned samples, until its guard refuses one.
+    command: Option<CommandPath>,
     tool_calls: u64,
     /// The active tool and its radius (mm), until a zero-radius warning was given for it.
     tool: Option<(u32, f64)>,
@@ -182,7 +193,9 @@ struct MachineChecks<'a> {
 impl<'a> MachineChecks<'a> {
     fn new(path: &'a Path, config: &'a MachineConfig, start: Pose) -> Self {
         let planner = config.planner(start).ok();
+        let at: Vec<f64> = config.axes.iter().map(|a| a.start).collect();
         Self {
+            command: Some(CommandPath::new(config, &at)),
             path,
             config,
             letters: config.letters(),
@@ -410,33 +423,35 @@ impl<'a> MachineChecks<'a> {
         })
     }
 
-    /// Plans the op (no motion): the planner's refusals are errors.
+    /// Plans the op (no motion) as the run feeds it to the planner: the planner's refusals
+    /// are errors.
     fn plan(&mut self, op: Op, report: &mut TestRunReport) {
-        let Some(planner) = &mut self.planner else {
-            return;
-        };
-        let loc = op.loc;
-        if let Err(e) = planner.push(op) {
-            self.error(report, loc, e.to_string());
-            report.undecided.push(format!(
-                "the planner pass stops at line {}: later moves start from an unknown point",
-                loc.line
-            ));
-            self.planner = None;
-            return;
-        }
-        while !planner.needs_input() {
-            match planner.next_step() {
-                Some(Step::Sample(s)) => report.planned_time = s.t,
-                Some(Step::Event(_)) => {}
-                None => break,
-            }
-            if report.planned_time > MAX_PLANNED_TIME {
+        for op in planner_ops(op, &self.letters, &self.positioning) {
+            let Some(planner) = &mut self.planner else {
+                return;
+            };
+            let loc = op.loc;
+            if let Err(e) = planner.push(op) {
+                self.error(report, loc, e.to_string());
                 report.undecided.push(format!(
-                    "the planner pass stopped after {MAX_PLANNED_TIME} s of machine time"
+                    "the planner pass stops at line {}: later moves start from an unknown point",
+                    loc.line
                 ));
                 self.planner = None;
                 return;
+            }
+            while !planner.needs_input() {
+                let Some(step) = planner.next_step() else {
+                    break;
+                };
+                follow(&mut self.command, self.path, &step, report);
+                if report.planned_time > MAX_PLANNED_TIME {
+                    report.undecided.push(format!(
+                        "the planner pass stopped after {MAX_PLANNED_TIME} s of machine time"
+                    ));
+                    self.planner = None;
+                    return;
+                }
             }
         }
     }
@@ -447,13 +462,45 @@ impl<'a> MachineChecks<'a> {
         };
         planner.finish();
         while report.planned_time <= MAX_PLANNED_TIME {
-            match planner.next_step() {
-                Some(Step::Sample(s)) => report.planned_time = s.t,
-                Some(Step::Event(_)) => {}
-                None => break,
-            }
+            let Some(step) = planner.next_step() else {
+                break;
+            };
+            follow(&mut self.command, self.path, &step, report);
         }
     }
+}
+
+/// Follows one planner step the way the run does: events switch the kinematics, samples
+/// become machine-axis setpoints through the run's own command path and its setpoint guard.
+/// The run stops at the first setpoint the guard refuses, so the setpoint checks stop there
+/// too; a soft-limit refusal at a line whose move the travel check has already reported is
+/// the same problem and is not said twice.
+fn follow(command: &mut Option<CommandPath>, path: &Path, step: &Step, report: &mut TestRunReport) {
+    let sample = match step {
+        Step::Sample(s) => s,
+        Step::Event(op) => {
+            if let Some(c) = command {
+                c.event(op);
+            }
+            return;
+        }
+    };
+    report.planned_time = sample.t;
+    let Some(c) = command else {
+        return;
+    };
+    let Err(v) = c.positions(sample, sample.t) else {
+        return;
+    };
+    let said = matches!(v, Violation::Travel { .. })
+        && report
+            .errors
+            .iter()
+            .any(|d| d.file == path && d.line == sample.loc.line);
+    if !said {
+        report.errors.push(refused_in_check(path, sample.loc, &v));
+    }
+    *command = None;
 }
 
 /// A diagnostic for the block at `loc`, its message prefixed with the block number.
@@ -481,7 +528,7 @@ pub(crate) fn block_diagnostic(path: &Path, loc: SourceLoc, message: String) -> 
 }
 
 /// True when a motion op moves a positioning-only axis.
-pub(crate) fn moves_positioning_axis(
+fn moves_positioning_axis(
     op: &Op,
     letters: &[AxisLetter],
     positioning: &[Option<(f64, f64)>],
@@ -493,6 +540,20 @@ pub(crate) fn moves_positioning_axis(
         .iter()
         .zip(positioning)
         .any(|(l, p)| p.is_some() && hi[*l] - lo[*l] > 1e-12)
+}
+
+/// The ops the planner gets for `op`, as a run feeds them: a move of a positioning-only axis
+/// comes between two exact stops, so the path is at rest before and after its block.
+pub(crate) fn planner_ops(
+    op: Op,
+    letters: &[AxisLetter],
+    positioning: &[Option<(f64, f64)>],
+) -> impl Iterator<Item = Op> + use<> {
+    let stop = moves_positioning_axis(&op, letters, positioning).then_some(Op {
+        kind: OpKind::ExactStop,
+        loc: op.loc,
+    });
+    [stop.clone(), Some(op), stop].into_iter().flatten()
 }
 
 /// Refuses a motion op that moves a positioning-only axis together with another axis: such an

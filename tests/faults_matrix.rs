@@ -106,6 +106,7 @@ fn run_case(case: &Case) -> Outcome {
         code: None,
         amplitude: (case.kind == FaultKind::Noise).then_some(20_000),
         duration: None,
+        offset: None,
     }];
     let letters = config.letters();
     let dt = config.servo_period;
@@ -174,8 +175,11 @@ fn run_case(case: &Case) -> Outcome {
             );
         }
         FaultKind::Estop => assert_eq!(fault, AxisFault::EStop, "{label}"),
-        // Stops on the path, not quick stops: tests/faults_path.rs.
-        FaultKind::Stall | FaultKind::Spindle => unreachable!("{label}: not in this matrix"),
+        // Stops on the path, not quick stops: tests/faults_path.rs; the setpoint guard's
+        // jumps: tests/setpoint_guard.rs.
+        FaultKind::Stall | FaultKind::Spindle | FaultKind::Jump => {
+            unreachable!("{label}: not in this matrix")
+        }
         FaultKind::Stuck | FaultKind::Noise => {
             assert_eq!(Some(axis), case.axis, "{label}");
             assert!(

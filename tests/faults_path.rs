@@ -42,6 +42,7 @@ fn fault(kind: FaultKind, at: f64, duration: Option<f64>) -> FaultConfig {
         code: None,
         amplitude: None,
         duration,
+        offset: None,
     }
 }
 

@@ -24,6 +24,7 @@ fn a_faulted_rotary_axis_is_held_and_the_others_brake_within_their_distance() {
         code: None,
         amplitude: None,
         duration: None,
+        offset: None,
     }];
     let path = temp_program("qs_hold.h", TURNING);
     let (result, trace) = run(&path, &machine);

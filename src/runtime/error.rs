@@ -54,6 +54,16 @@ pub enum RunError {
         /// Program line being executed.
         line: u32,
     },
+    /// The setpoint guard refused a commanded setpoint (a step beyond the axis's velocity or
+    /// acceleration limit, or outside its travel): it was not sent, the axes were brought to
+    /// rest with a quick stop from the last good setpoint.
+    #[error("{diagnostic}")]
+    Setpoint {
+        /// Where (`file:line:col`, block) and what.
+        diagnostic: Diagnostic,
+        /// The refused step.
+        violation: super::guard::Violation,
+    },
     /// The run was stopped on request (after a feed hold brought it to rest).
     #[error("stopped on request (at line {line})")]
     Stopped {

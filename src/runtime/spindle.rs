@@ -10,7 +10,7 @@ impl Run<'_, '_> {
     /// The main spindle speed for constant surface speed `v` (m/min) at the tool's present
     /// radius (program X), limited to the machine's maximum.
     pub(super) fn surface_speed_rpm(&mut self, v: f64) -> f64 {
-        let radius = self.kin.to_program(&self.commanded)[AxisLetter::X];
+        let radius = self.command.kinematics().to_program(&self.commanded)[AxisLetter::X];
         let max = self.io.spindle_mut().map_or(0.0, |s| s.max_rpm);
         OpStream::surface_speed_rpm(v, radius, max)
     }

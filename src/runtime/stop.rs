@@ -153,6 +153,9 @@ impl Run<'_, '_> {
                 },
                 None,
             ),
+            RunError::Setpoint { violation, .. } => {
+                (StopCause::Setpoint(*violation), Some(violation.axis()))
+            }
             other => (StopCause::Program(other.to_string()), None),
         };
         tracing::error!(line = self.line, "{cause}: quick stop");

@@ -371,9 +371,9 @@ impl MachineLoop {
             None => (MachineState::Finished, None),
             Some(RunError::Stopped { .. }) => (MachineState::Stopped, None),
             Some(e @ RunError::Operator { .. }) => (MachineState::Stopped, Some(e.to_string())),
-            Some(e @ (RunError::Fault { .. } | RunError::Spindle { .. })) => {
-                (MachineState::Fault, Some(e.to_string()))
-            }
+            Some(
+                e @ (RunError::Fault { .. } | RunError::Spindle { .. } | RunError::Setpoint { .. }),
+            ) => (MachineState::Fault, Some(e.to_string())),
             Some(RunError::Syntax(diags)) => (
                 MachineState::Error,
                 Some(
