@@ -21,7 +21,7 @@
 //! `at_speed_timeout`.
 
 mod stop;
-pub(crate) mod stream;
+pub mod stream;
 
 use crate::config::MachineConfig;
 use crate::machine::{MachineError, MachineIo};
