@@ -339,3 +339,36 @@ fn the_pipeline_target_plans_each_dialect_within_the_limits() {
     let run = targets::pipeline_run(b"\x01\xff\xfe garbage");
     assert_eq!((run.ops, run.samples), (0, 0));
 }
+
+/// Every minimized finding in fuzz/findings/ goes through the target its file name starts
+/// with (the README there says what each one did), so a fixed finding stays fixed.
+#[test]
+fn findings_replay() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/findings");
+    let targets: [(&str, fn(&[u8])); 7] = [
+        ("klartext_", targets::program_klartext),
+        ("tnc_iso_", targets::program_tnc_iso),
+        ("lathe_din_", targets::program_lathe_din),
+        ("machine_toml_", targets::machine_toml),
+        ("slcan_", targets::slcan_stream),
+        ("canopen_", targets::canopen_frames),
+        ("pipeline_", targets::pipeline),
+    ];
+    let mut replayed = 0;
+    for entry in std::fs::read_dir(&dir).expect("fuzz/findings") {
+        let path = entry.expect("a folder entry").path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default();
+        if name == "README.md" {
+            continue;
+        }
+        let Some((_, target)) = targets.iter().find(|(p, _)| name.starts_with(p)) else {
+            panic!("{name}: no fuzz target for this finding");
+        };
+        target(&std::fs::read(&path).expect("a finding"));
+        replayed += 1;
+    }
+    assert!(replayed >= 2, "only {replayed} findings replayed");
+}
