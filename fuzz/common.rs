@@ -281,7 +281,7 @@ fn run_pipeline(path: &Path, config: &MachineConfig) -> PipelineRun {
                 run.step_error = Some(format!(
                     "axis {axis}: setpoint step {step:.6} from {from:.6} to {to:.6} in one \
                      period at t = {:.3} s (line {}), above the limit {:.6} (velocity {} · \
-                     period {period} · 1.1)",
+                     period {period} · (1 + {STEP_MARGIN}) + 1e-9)",
                     sample.t, sample.loc.line, max_step[k], config.axes[k].max_velocity
                 ));
             }

@@ -340,12 +340,15 @@ fn the_pipeline_target_plans_each_dialect_within_the_limits() {
     assert_eq!((run.ops, run.samples), (0, 0));
 }
 
+/// A fuzz target body.
+type Target = fn(&[u8]);
+
 /// Every minimized finding in fuzz/findings/ goes through the target its file name starts
 /// with (the README there says what each one did), so a fixed finding stays fixed.
 #[test]
 fn findings_replay() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/findings");
-    let targets: [(&str, fn(&[u8])); 7] = [
+    let targets: [(&str, Target); 7] = [
         ("klartext_", targets::program_klartext),
         ("tnc_iso_", targets::program_tnc_iso),
         ("lathe_din_", targets::program_lathe_din),
