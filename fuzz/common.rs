@@ -5,12 +5,17 @@
 #![allow(dead_code)]
 
 use klar::config::MachineConfig;
+use klar::runtime::stream::OpStream;
+use klar::testrun::{check_travel, start_pose, test_run};
 use klar_drivers::can::memory::MemoryBus;
 use klar_drivers::can::slcan::{SlcanDecoder, SlcanMessage, decode_line, encode_frame};
 use klar_drivers::can::{CanBus, CanFrame, CanId};
 use klar_drivers::canopen::Master;
 use klar_drivers::canopen::emcy::Emergency;
-use klar_interp::{Interpreter, Pose};
+use klar_interp::{Interpreter, OpKind, Pose};
+use klar_motion::Step;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
 use std::time::Duration;
 
 /// Most ops taken from one fuzzed program (loops in a program may be endless by design).
@@ -104,5 +109,187 @@ pub fn canopen_frames(data: &[u8]) {
         master.set_time(t);
         let _ = master.poll();
         while master.next_event().is_some() {}
+    }
+}
+
+/// Whole pipeline: most ops one input may feed the planner.
+const PIPELINE_MAX_OPS: usize = 5_000;
+/// Whole pipeline: most planned machine time per input, s.
+const PIPELINE_MAX_TIME: f64 = 5.0;
+/// Whole pipeline: most samples per input (5 s at the built-in machines' 1 ms period, with
+/// room for a shorter period).
+const PIPELINE_MAX_SAMPLES: usize = 10_000;
+/// Slack on the per-period step check: the velocity limit · period · (1 + this) + 1e-9.
+const STEP_MARGIN: f64 = 0.10;
+
+static MILL5: OnceLock<MachineConfig> = OnceLock::new();
+static LATHE: OnceLock<MachineConfig> = OnceLock::new();
+
+/// The whole pipeline as a run executes it, without the drives: the program (the first byte
+/// 0, 1 or 2 picks Klartext, TNC ISO or lathe DIN and is dropped; any other input is
+/// Klartext) on the built-in 5-axis mill (lathe DIN: the built-in lathe) through the
+/// interpreter, radius compensation with the tilted working plane and the feed resolution
+/// ([`OpStream`]), the travel check, the planner, and each sample through the machine's
+/// kinematics to machine-axis setpoints. Bounded per input by ops, planned time and samples.
+///
+/// Every sample and setpoint must be finite. On programs the test run accepts, no machine
+/// axis may be commanded further in one servo period than its velocity limit allows (10 %
+/// margin); a violation panics naming the axis and the step.
+pub fn pipeline(data: &[u8]) {
+    let (path, config) = scratch_program(data);
+    let run = run_pipeline(&path, config);
+    // A step beyond the limit counts only where a run would start: the test run accepts.
+    let step = run.step_error.filter(|_| test_run(&path, config).passed());
+    let _ = std::fs::remove_file(&path);
+    if let Some(message) = step {
+        panic!("{message}");
+    }
+}
+
+/// What one input did in the whole pipeline.
+#[derive(Debug, Clone, Default)]
+pub struct PipelineRun {
+    /// Ops the planner was offered.
+    pub ops: usize,
+    /// Samples planned (servo cycles).
+    pub samples: usize,
+    /// The first setpoint step beyond an axis's velocity limit, in words (before the test
+    /// run's verdict on the program).
+    pub step_error: Option<String>,
+}
+
+/// Runs one input through the whole pipeline as [`pipeline`] does and reports it, without
+/// the test run's verdict; panics on a non-finite sample or setpoint.
+pub fn pipeline_run(data: &[u8]) -> PipelineRun {
+    let (path, config) = scratch_program(data);
+    let run = run_pipeline(&path, config);
+    let _ = std::fs::remove_file(&path);
+    run
+}
+
+/// Writes the program of a pipeline input to this thread's scratch file; returns the file
+/// and the machine it runs on.
+fn scratch_program(data: &[u8]) -> (PathBuf, &'static MachineConfig) {
+    let (dialect, text) = match data.split_first() {
+        Some((&b @ 0..=2, rest)) => (b, rest),
+        _ => (0, data),
+    };
+    let (ext, config) = match dialect {
+        1 => ("i", MILL5.get_or_init(MachineConfig::builtin_mill5)),
+        2 => ("nc", LATHE.get_or_init(MachineConfig::builtin_lathe)),
+        _ => ("h", MILL5.get_or_init(MachineConfig::builtin_mill5)),
+    };
+    // The runtime opens programs by path (dialect by content and extension, called programs
+    // beside it): the input goes to a scratch file of this thread.
+    let path = scratch_file(ext);
+    if let Err(e) = std::fs::write(&path, text) {
+        panic!("fuzz harness: cannot write {}: {e}", path.display());
+    }
+    (path, config)
+}
+
+/// A file name in the temp folder for this process and thread, with extension `ext`.
+fn scratch_file(ext: &str) -> PathBuf {
+    let thread: String = format!("{:?}", std::thread::current().id())
+        .chars()
+        .filter(char::is_ascii_digit)
+        .collect();
+    std::env::temp_dir().join(format!(
+        "klar-fuzz-pipeline-{}-{thread}.{ext}",
+        std::process::id()
+    ))
+}
+
+/// Streams the program at `path` through the pipeline on `config`, as `Run` feeds and steps
+/// it. Panics on a non-finite sample or setpoint.
+fn run_pipeline(path: &Path, config: &MachineConfig) -> PipelineRun {
+    let mut run = PipelineRun::default();
+    let start = start_pose(config);
+    let Ok(mut interp) = config.open_program(path, start) else {
+        return run;
+    };
+    // No file is written (FN 16, FN 27) while fuzzing.
+    interp.set_dry_run(true);
+    let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
+    let mut ops = OpStream::new(interp, start, max_rpm, path);
+    let Ok(mut planner) = config.planner(start) else {
+        return run;
+    };
+    let mut kin = config.kinematics();
+    let letters = config.letters();
+    let travel: Vec<[f64; 2]> = config.axes.iter().map(|a| a.travel).collect();
+    let period = config.servo_period;
+    let max_step: Vec<f64> = config
+        .axes
+        .iter()
+        .map(|a| a.max_velocity * period * (1.0 + STEP_MARGIN) + 1e-9)
+        .collect();
+    let mut commanded: Vec<f64> = config.axes.iter().map(|a| a.start).collect();
+    let mut next = commanded.clone();
+    let mut input_done = false;
+    loop {
+        // Feeding as `Run::feed_planner`: the first error (program, travel, planner) lets
+        // the motion before it finish.
+        while !input_done && planner.needs_input() {
+            let op = match ops.next() {
+                Some(Ok(op)) => op,
+                Some(Err(_)) | None => {
+                    planner.finish();
+                    input_done = true;
+                    break;
+                }
+            };
+            run.ops += 1;
+            if run.ops > PIPELINE_MAX_OPS {
+                return run;
+            }
+            let refused =
+                check_travel(&op, &letters, &travel, path).is_err() || planner.push(op).is_err();
+            if refused {
+                planner.finish();
+                input_done = true;
+            }
+        }
+        let sample = match planner.next_step() {
+            Some(Step::Sample(s)) => s,
+            Some(Step::Event(op)) => {
+                if let OpKind::Tcpm { on, .. } = op.kind {
+                    kin.set_tcpm(on);
+                }
+                continue;
+            }
+            // The planner freed room and wants more before it goes on.
+            None if !input_done && planner.needs_input() => continue,
+            None => return run,
+        };
+        let finite = sample.t.is_finite()
+            && sample.pose.0.iter().all(|v| v.is_finite())
+            && sample.velocity.iter().all(|v| v.is_finite())
+            && sample.acceleration.iter().all(|v| v.is_finite());
+        assert!(finite, "non-finite sample: {sample:?}");
+        kin.to_machine(&sample.pose, &mut next);
+        for (k, (&to, &from)) in next.iter().zip(&commanded).enumerate() {
+            let axis = letters[k];
+            assert!(
+                to.is_finite(),
+                "axis {axis}: non-finite setpoint {to} at t = {} s (line {})",
+                sample.t,
+                sample.loc.line
+            );
+            let step = (to - from).abs();
+            if step > max_step[k] && run.step_error.is_none() {
+                run.step_error = Some(format!(
+                    "axis {axis}: setpoint step {step:.6} from {from:.6} to {to:.6} in one \
+                     period at t = {:.3} s (line {}), above the limit {:.6} (velocity {} · \
+                     period {period} · (1 + {STEP_MARGIN}) + 1e-9)",
+                    sample.t, sample.loc.line, max_step[k], config.axes[k].max_velocity
+                ));
+            }
+        }
+        std::mem::swap(&mut commanded, &mut next);
+        run.samples += 1;
+        if run.samples >= PIPELINE_MAX_SAMPLES || sample.t >= PIPELINE_MAX_TIME {
+            return run;
+        }
     }
 }

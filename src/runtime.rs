@@ -31,7 +31,7 @@ pub mod guard;
 mod operator;
 mod spindle;
 mod stop;
-pub(crate) mod stream;
+pub mod stream;
 
 use crate::config::MachineConfig;
 use crate::machine::{MachineError, MachineIo};

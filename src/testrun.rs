@@ -587,7 +587,7 @@ pub(crate) fn check_positioning(
 
 /// Refuses a motion op whose path leaves the travel (soft limits) of an axis, naming the
 /// block and the axis.
-pub(crate) fn check_travel(
+pub fn check_travel(
     op: &Op,
     letters: &[AxisLetter],
     travel: &[[f64; 2]],

@@ -1,8 +1,8 @@
 //! The bounded stable fuzz run: the cargo-fuzz target bodies (fuzz/common.rs) on inputs
 //! mutated from the repository's own programs, machine files and protocol traffic, a fixed
 //! number of executions per target, deterministic (seeded), so it fits in `cargo test` and
-//! CI. A long stable run sets `KLAR_FUZZ_EXECS`; the open-ended coverage-guided run is
-//! `cargo +nightly fuzz run TARGET` in fuzz/ (docs/safety.md). `KLAR_FUZZ_LAST=DIR` keeps
+//! CI. A long run sets `KLAR_FUZZ_EXECS`; the open-ended coverage-guided run is
+//! `scripts/fuzz.sh` (cargo-fuzz on stable with RUSTC_BOOTSTRAP=1, docs/safety.md). `KLAR_FUZZ_LAST=DIR` keeps
 //! each target's input under test in DIR, so a hang or crash leaves its input behind.
 
 #[path = "../fuzz/common.rs"]
@@ -13,11 +13,14 @@ use std::path::Path;
 /// Executions per target in the bounded run; `KLAR_FUZZ_EXECS` raises it for a long run.
 const EXECS: usize = 4000;
 
-fn execs() -> usize {
+/// Executions of the whole-pipeline target, which plans up to 5 s of motion per input.
+const PIPELINE_EXECS: usize = 150;
+
+fn execs(default: usize) -> usize {
     std::env::var("KLAR_FUZZ_EXECS")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(EXECS)
+        .unwrap_or(default)
 }
 
 /// xorshift64*: deterministic mutations.
@@ -90,6 +93,18 @@ fn fuzz(
     dictionary: &[&[u8]],
     target: fn(&[u8]),
 ) -> usize {
+    fuzz_n(name, seed, seeds, dictionary, target, EXECS)
+}
+
+/// Runs `target` on every seed and then on `default` mutants (or `KLAR_FUZZ_EXECS`).
+fn fuzz_n(
+    name: &str,
+    seed: u64,
+    seeds: Vec<Vec<u8>>,
+    dictionary: &[&[u8]],
+    target: fn(&[u8]),
+    default: usize,
+) -> usize {
     assert!(!seeds.is_empty(), "{name}: no seeds");
     let mut rng = Rng(seed);
     let mut count = 0;
@@ -99,7 +114,7 @@ fn fuzz(
     }
     let last = std::env::var_os("KLAR_FUZZ_LAST").map(|d| Path::new(&d).join(name));
     let mut current = seeds[0].clone();
-    for _ in 0..execs() {
+    for _ in 0..execs(default) {
         let base = if rng.below(4) == 0 {
             seeds[rng.below(seeds.len())].clone()
         } else {
@@ -276,4 +291,87 @@ fn canopen_frames() {
         &[0x80, 0, 0],
     ];
     fuzz("canopen", 6, seeds, words, targets::canopen_frames);
+}
+
+#[test]
+fn whole_pipeline() {
+    // Klartext as it is; TNC ISO and lathe DIN behind the byte that picks their dialect.
+    let mut seeds = files("programs", "h");
+    let prefixed = |byte: u8, dir: &str, ext: &str| {
+        files(dir, ext).into_iter().map(move |p| {
+            let mut v = vec![byte];
+            v.extend(p);
+            v
+        })
+    };
+    seeds.extend(prefixed(1, "programs/iso", "i"));
+    seeds.extend(prefixed(2, "programs/lathe", "nc"));
+    fuzz_n(
+        "pipeline",
+        7,
+        seeds,
+        PROGRAM_WORDS,
+        targets::pipeline,
+        PIPELINE_EXECS,
+    );
+}
+
+#[test]
+fn the_pipeline_target_plans_each_dialect_within_the_limits() {
+    let read = |p: &str| std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join(p)).unwrap();
+    let with = |byte: u8, p: &str| [vec![byte], read(p)].concat();
+    for (name, input) in [
+        ("klartext", read("programs/rectangle_rl.h")),
+        (
+            "klartext, first byte 0",
+            with(0, "programs/plane_spatial.h"),
+        ),
+        ("tnc iso", with(1, "programs/iso/rectangle.i")),
+        ("lathe din", with(2, "programs/lathe/shaft_turning.nc")),
+    ] {
+        let run = targets::pipeline_run(&input);
+        // Real motion went through the planner and the kinematics, within every limit.
+        assert!(run.ops > 5, "{name}: {run:?}");
+        assert!(run.samples > 500, "{name}: {run:?}");
+        assert_eq!(run.step_error, None, "{name}");
+    }
+    // Not a program: nothing reaches the planner.
+    let run = targets::pipeline_run(b"\x01\xff\xfe garbage");
+    assert_eq!((run.ops, run.samples), (0, 0));
+}
+
+/// A fuzz target body.
+type Target = fn(&[u8]);
+
+/// Every minimized finding in fuzz/findings/ goes through the target its file name starts
+/// with (the README there says what each one did), so a fixed finding stays fixed.
+#[test]
+fn findings_replay() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/findings");
+    let targets: [(&str, Target); 7] = [
+        ("klartext_", targets::program_klartext),
+        ("tnc_iso_", targets::program_tnc_iso),
+        ("lathe_din_", targets::program_lathe_din),
+        ("machine_toml_", targets::machine_toml),
+        ("slcan_", targets::slcan_stream),
+        ("canopen_", targets::canopen_frames),
+        ("pipeline_", targets::pipeline),
+    ];
+    let mut replayed = 0;
+    for entry in std::fs::read_dir(&dir).expect("fuzz/findings") {
+        let path = entry.expect("a folder entry").path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default();
+        if name == "README.md" {
+            continue;
+        }
+        let Some((_, target)) = targets.iter().find(|(p, _)| name.starts_with(p)) else {
+            panic!("{name}: no fuzz target for this finding");
+        };
+        target(&std::fs::read(&path).expect("a finding"));
+        replayed += 1;
+    }
+    assert!(replayed >= 2, "only {replayed} findings replayed");
 }

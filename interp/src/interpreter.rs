@@ -59,8 +59,11 @@ pub const CHECK_JUMP_LIMIT: u64 = 100_000;
 
 /// Most jumps a run follows without producing any op (no motion, no machine function) before
 /// it stops with an "endless loop" error: a loop that neither moves nor switches anything can
-/// never end differently, and a control must not hang silently on it.
-pub const RUN_IDLE_JUMP_LIMIT: u64 = 1_000_000;
+/// never end differently, and a control must not hang silently on it. The same number as
+/// [`CHECK_JUMP_LIMIT`] (and the TNC ISO runner's idle limit): a program the check accepts
+/// never reaches it, and the op pass of the test run gives up on an idle loop as soon as the
+/// check does.
+pub const RUN_IDLE_JUMP_LIMIT: u64 = 100_000;
 
 /// Most diagnostics one `check` run reports before it gives up (an error inside a loop
 /// would otherwise repeat with every pass).

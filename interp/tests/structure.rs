@@ -247,3 +247,42 @@ fn an_endless_loop_without_motion_stops_with_an_error() {
         "{d}"
     );
 }
+
+/// A loop that only computes (fuzz finding `fuzz/findings/pipeline_idle_loop_slow.h`: a
+/// counter that steps past zero) stops in a run after as many jumps as the check follows, not
+/// ten times more: the test run's op pass and `klar run` give up where `klar check` does.
+#[test]
+fn an_idle_loop_stops_a_run_where_the_check_stops() {
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../fuzz/findings/pipeline_idle_loop_slow.h");
+    let text = std::fs::read_to_string(&path).expect("the finding is in the repository");
+    let interp = klar_interp::Interpreter::from_source("idle.h", &text, klar_interp::Pose::ZERO);
+    let mut ops = 0;
+    let mut error = None;
+    for item in interp {
+        match item {
+            Ok(_) => ops += 1,
+            Err(d) => {
+                error = Some(d);
+                break;
+            }
+        }
+    }
+    assert_eq!(ops, 0);
+    let d = error.expect("the loop must end with an error");
+    assert_eq!(d.line, 10, "{d}");
+    let limit = klar_interp::CHECK_JUMP_LIMIT.to_string();
+    assert!(
+        d.message
+            .contains(&format!("more than {limit} jumps without any motion")),
+        "{d}"
+    );
+    // The check stops the same program at the same number of jumps.
+    let checked = klar_interp::Interpreter::from_source("idle.h", &text, klar_interp::Pose::ZERO)
+        .check_report();
+    assert!(
+        checked.errors.iter().any(|e| e.message.contains(&limit)),
+        "{:?}",
+        checked.errors
+    );
+}

@@ -8,6 +8,9 @@
 //!   is taken at the block's end point radius, `v·1000 / (2π·r)`, limited to the machine's
 //!   maximum — an approximation for blocks that change the radius, where a real control
 //!   varies the feed along the block.
+//!
+//! The run, the test run and the whole-pipeline fuzz target (`fuzz/common.rs`) all plan from
+//! this stream, so what they check is what a run executes.
 
 use super::RunError;
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
@@ -28,8 +31,10 @@ struct Spindles {
     last: Option<SpindleId>,
 }
 
-/// Interpreter → compensation → feed resolution.
-pub(crate) struct OpStream {
+/// Interpreter → compensation (with the tilted working plane) → feed resolution: yields the
+/// ops in the order the planner takes them. Its errors are program diagnostics
+/// ([`RunError::Program`]); a run stops reading at the first.
+pub struct OpStream {
     interp: Interpreter,
     comp: Compensator,
     ready: VecDeque<Op>,
@@ -42,12 +47,7 @@ pub(crate) struct OpStream {
 impl OpStream {
     /// A stream over `interp`, compensating from `start`; `max_rpm` limits surface-speed
     /// conversions.
-    pub(crate) fn new(
-        mut interp: Interpreter,
-        start: Pose,
-        max_rpm: f64,
-        path: &std::path::Path,
-    ) -> Self {
+    pub fn new(mut interp: Interpreter, start: Pose, max_rpm: f64, path: &std::path::Path) -> Self {
         // Compensation runs in a tilted working plane; the compensator turns its output.
         interp.set_working_plane_ops(true);
         Self {
@@ -62,12 +62,12 @@ impl OpStream {
     }
 
     /// Blocks the interpreter executed.
-    pub(crate) fn blocks_executed(&self) -> u64 {
+    pub fn blocks_executed(&self) -> u64 {
         self.interp.blocks_executed()
     }
 
     /// The spindle speed in rpm for constant surface speed `v` (m/min) at radius `r` (mm).
-    pub(crate) fn surface_speed_rpm(v: f64, r: f64, max_rpm: f64) -> f64 {
+    pub fn surface_speed_rpm(v: f64, r: f64, max_rpm: f64) -> f64 {
         if r.abs() < 1e-9 {
             return max_rpm;
         }
