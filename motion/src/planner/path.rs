@@ -41,6 +41,7 @@ use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, Line, Metric, PathPoint, Segment};
 use crate::limits::{Grip, Headroom, LimitError, PieceLimits, path_limits};
+use crate::profile::Ramp;
 use klar_interp::{Op, Pose, SourceLoc};
 
 /// Largest feed override, as a factor: path limits are prepared for it.
@@ -492,6 +493,49 @@ fn too_slow(
         || b.acceleration < SLOW_BLEND * l.acceleration.min(r.acceleration)
 }
 
+/// True when the element turns a rotary axis along its linear motion.
+fn turns_rotary(e: &Element) -> bool {
+    e.segment.metric() == Metric::Linear && Metric::Rotary.norm(&e.segment.bounds().d1) > 0.0
+}
+
+/// True when stopping at the corner takes less time than slowing down into the blend and
+/// speeding up out of it (a corner next to a move that turns a rotary axis, where the
+/// rotary axis's turn per millimetre can put the blend's limits far below its neighbours').
+///
+/// The estimate: from the top speed of `cur` down to the lowest of the three top speeds and
+/// on to that of `next`, each jerk-limited ramp with the lower of the limits on its two
+/// sides (the look-ahead brakes into a piece with its jerk), against braking `cur` to rest
+/// and speeding `next` up from rest with their own limits.
+fn stop_is_faster(
+    blend: &Quintic,
+    length: f64,
+    feed: Option<f64>,
+    cur: &Element,
+    next: &Element,
+    limits: &[Option<AxisLimits>; 9],
+) -> bool {
+    let Ok(b) = piece_limits(&blend.bounds(), length, feed, limits, Headroom::Ample) else {
+        return true;
+    };
+    let (Some(l), Some(r)) = (element_limits(cur, limits), element_limits(next, limits)) else {
+        return true;
+    };
+    let time = |from: f64, to: f64, accel: f64, jerk: f64| {
+        Ramp::new(from, 0.0, to, accel, jerk).duration()
+    };
+    let low = b.velocity.min(l.velocity).min(r.velocity);
+    let through = time(l.velocity, low, l.acceleration, l.jerk.min(b.jerk))
+        + time(
+            low,
+            r.velocity,
+            r.acceleration.min(b.acceleration),
+            r.jerk.min(b.jerk),
+        );
+    let stop = time(l.velocity, 0.0, l.acceleration, l.jerk)
+        + time(0.0, r.velocity, r.acceleration, r.jerk);
+    through > stop
+}
+
 /// The split point to give `mid` at its midpoint when it can become one between `prev`
 /// and `next` ([`split_point`]); `tp` and `tm` are the unit tangents at the end of `prev`
 /// and the start of `mid`, `turn` the angle between them.
@@ -601,6 +645,11 @@ fn try_corner(
             let length = curve.length();
             let feed = min_feed(cur.feed, next.feed);
             if theta > SPLIT_MAX_ANGLE && too_slow(&curve, length, feed, cur, next, limits) {
+                return None;
+            }
+            if (turns_rotary(cur) || turns_rotary(next))
+                && stop_is_faster(&curve, length, feed, cur, next, limits)
+            {
                 return None;
             }
             let mut out = Committed::default();
