@@ -123,7 +123,8 @@ pub struct Planner {
     tolerance: f64,
     /// Look-ahead distance wanted beyond the current position.
     horizon: f64,
-    /// Lowest path acceleration and jerk of any piece (for the scan distance).
+    /// Floors of the path acceleration and jerk the look-ahead distance is sized with
+    /// (pieces that turn a rotary axis may go below them: `low_ahead`).
     accel_floor: f64,
     jerk_floor: f64,
     /// The lowest limits of the pieces ahead that turn a rotary axis below the floors.

@@ -16,6 +16,9 @@
 //!   whose jerk is effectively unlimited); otherwise a blend as at any corner;
 //! * tolerance 0, rotary-only moves, a turn sharper than 120°, or no blend found: exact
 //!   stop at the corner;
+//! * next to an element that turns a rotary axis along its linear motion (whose turn per
+//!   millimetre can put the blend's limits far below its neighbours'): exact stop where
+//!   that is estimated to take less time than slowing into the blend and out of it;
 //! * otherwise a [`Quintic`] blend whose distance from the programmed contour is checked
 //!   against the tolerance ([`blend_within`]); it is made as long as the tolerance allows,
 //!   at most half of each element. A blend whose curvature varies along it (through a
