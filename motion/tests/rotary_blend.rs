@@ -176,6 +176,22 @@ fn dense_five_axis_code_with_small_c_steps_keeps_blending_at_the_feed() {
 }
 
 #[test]
+fn dense_five_axis_code_turning_c_fast_blends_without_stopping() {
+    // Chords of 0.2 mm with C 1° each (5°/mm) at F3000: C allows the path 36 mm/s, and its
+    // limits put the blends through the split points well below the lines'. The path slows
+    // down for them but stops nowhere between its ends.
+    let (start, ops) = cam_chords(200, 1.0, None, 50.0);
+    let r = run_within_limits(start, ops);
+    let v = path_speeds(&r);
+    let n = v.len();
+    let slowest = v[n / 10..9 * n / 10]
+        .iter()
+        .copied()
+        .fold(f64::INFINITY, f64::min);
+    assert!(slowest > 1.0, "slowest {slowest} mm/s");
+}
+
+#[test]
 fn a_sudden_large_c_step_in_dense_code_is_met_within_the_limits() {
     // The same chords with one in the middle that turns C by 20° over 0.2 mm (100°/mm).
     for feed in [20.0, 50.0] {
