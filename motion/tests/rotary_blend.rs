@@ -78,48 +78,51 @@ fn rest_to_rest(d: f64, v: f64, a: f64, j: f64) -> f64 {
     }
 }
 
-/// The program of the report: Z from 150 down to 100, then X+0.25 with A+0.5 and C+29
-/// (`a` false: without A), the second move at `feed`.
-fn z_then_x_with_c(a: bool, feed: Feed) -> (Pose, Vec<Op>, Pose) {
+/// The program of the report: Z from 150 down to 100 at rapid, then X+0.25 with A and C
+/// turning by `a` and `c` degrees, at `feed`.
+fn z_then_x_turning(a: f64, c: f64, feed: Feed) -> (Pose, Vec<Op>, Pose) {
     let start = pose(0.0, 0.0, 150.0, 0.0, 0.0);
     let p1 = pose(0.0, 0.0, 100.0, 0.0, 0.0);
-    let p2 = pose(0.25, 0.0, 100.0, if a { 0.5 } else { 0.0 }, 29.0);
+    let p2 = pose(0.25, 0.0, 100.0, a, c);
     let ops = vec![line(1, start, p1, Feed::Rapid), line(2, p1, p2, feed)];
     (start, ops, p2)
 }
 
-/// The corner between the Z move and the move that turns C by 116°/mm: C's limits allow
-/// the second move 1.55 mm/s, 12.4 mm/s² and 172 mm/s³ of path. Braking into a blend there
-/// with that jerk would take seconds; the corner stops exactly instead, so the program
-/// takes the two rest-to-rest times.
+/// The corner between the Z move and a move that turns C (or A) by over 50° per mm: with
+/// C at 116°/mm, C's limits allow the second move 1.55 mm/s, 12.4 mm/s² and 172 mm/s³ of
+/// path. Braking into a blend there with that jerk would take seconds; the corner stops
+/// exactly instead, so the program takes the two rest-to-rest times.
 #[test]
 fn a_corner_into_a_move_turning_c_fast_stops_and_keeps_every_axis_within_its_limits() {
-    for (with_a, feed) in [
-        (true, Feed::Rapid),
-        (true, Feed::Rate(50.0)),
-        (false, Feed::Rapid),
+    // The report's program at rapid and at F3000, without A, and the case the five-axis
+    // property test reduced it to (A alone, 58°/mm).
+    for (a, c, feed) in [
+        (0.5, 29.0, Feed::Rapid),
+        (0.5, 29.0, Feed::Rate(50.0)),
+        (0.0, 29.0, Feed::Rapid),
+        (14.5, 0.0, Feed::Rapid),
     ] {
-        let (start, ops, end) = z_then_x_with_c(with_a, feed);
+        let (start, ops, end) = z_then_x_turning(a, c, feed);
         let r = run_within_limits(start, ops);
         let last = r.samples.last().expect("samples");
         for i in 0..9 {
             assert!((last.pose.0[i] - end.0[i]).abs() < 1e-9, "axis {i}");
         }
-        // Z: 50 mm with Z's limits. The second move: its path limits are C's over its
-        // turn per mm (116), with A's over 2 where A turns; X allows more.
+        // Z: 50 mm with Z's limits. The second move: X's limits, and each rotary axis's
+        // over its turn per mm of path (the 0.25 mm of X).
         let tz = rest_to_rest(50.0, 100.0, 1500.0, 40_000.0);
-        let (mut v, mut a, mut j): (f64, f64, f64) =
-            (180.0 / 116.0, 1440.0 / 116.0, 20_000.0 / 116.0);
-        if with_a {
-            (v, a, j) = (v.min(90.0 / 2.0), a.min(720.0 / 2.0), j.min(10_000.0 / 2.0));
+        let (mut v, mut acc, mut j) = (166.0f64, 2000.0f64, 50_000.0f64);
+        for (turn, (vr, ar, jr)) in [(a, (90.0, 720.0, 10_000.0)), (c, (180.0, 1440.0, 20_000.0))] {
+            let k = turn / 0.25;
+            if k > 0.0 {
+                (v, acc, j) = (v.min(vr / k), acc.min(ar / k), j.min(jr / k));
+            }
         }
-        let tx = rest_to_rest(0.25, v, a, j);
+        let tx = rest_to_rest(0.25, v, acc, j);
         let t = last.t;
         assert!(
             t >= tz + tx - 2.0 * PERIOD && t <= tz + tx + 3.0 * PERIOD,
-            "{with_a} {feed:?}: {t} s against {} + {}",
-            tz,
-            tx
+            "A {a} C {c} {feed:?}: {t} s against {tz} + {tx}"
         );
     }
 }
