@@ -3,7 +3,7 @@
 //! commit produces.
 
 use super::path::{Committed, Element, NewPiece, Piece, Shape, Vertices, commit, piece_limits};
-use super::{Marker, Planner, path, piece_error, run, smooth, speed};
+use super::{Marker, Planner, deep, path, piece_error, run, smooth, speed};
 use crate::error::MotionError;
 use crate::geom::Metric;
 use crate::limits::Headroom;
@@ -162,7 +162,15 @@ impl Planner {
                 loc,
             };
             piece.drop = self.drops.next(piece.speed_limit(1.0));
+            let turns = deep::turns_rotary(&bounds, length);
+            if turns && self.too_close_for(&piece) {
+                self.add_stop(self.committed_end);
+            }
             self.push_piece(piece);
+            if let Some(p) = self.pieces.back() {
+                let floors = (self.accel_floor, self.jerk_floor);
+                self.low_ahead.record(p, turns, floors);
+            }
             self.committed_end += length;
             if is_element {
                 events_at = self.committed_end;
@@ -245,6 +253,36 @@ impl Planner {
             }
         }
         self.pieces.push_back(piece);
+    }
+
+    /// True when `piece`, about to be committed at the end of the path, has limits below the
+    /// look-ahead's floors that the path state can no longer meet: it is too fast and too
+    /// close to slow down with them (see `deep`), and no stop lies between. Up to now the
+    /// end of the committed path was its end, so a stop there can always be met.
+    fn too_close_for(&self, piece: &Piece) -> bool {
+        let floors = (self.accel_floor, self.jerk_floor);
+        let accel = deep::lowest_accel(piece);
+        if accel >= floors.0 && piece.jerk >= floors.1 {
+            return false;
+        }
+        let stop_between = self.markers.iter().any(|m| match m {
+            Marker::Stop { at, .. } => *at <= piece.start,
+            Marker::Event { .. } => false,
+        });
+        if stop_between {
+            return false;
+        }
+        // The path brakes into the piece with the acceleration of the pieces before it and
+        // the lowest jerk on the way, the piece's own included.
+        let (low_accel, low_jerk) = self.low_ahead.lowest(floors);
+        deep::too_close(
+            &self.state,
+            piece.start,
+            piece.speed_limit(self.factor),
+            low_accel,
+            low_jerk.min(piece.jerk),
+            self.config.period,
+        )
     }
 
     /// A plain standstill at `at`.

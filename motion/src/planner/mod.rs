@@ -26,6 +26,7 @@
 //! step onto the point).
 
 mod commit;
+mod deep;
 mod drops;
 pub mod path;
 mod run;
@@ -122,9 +123,12 @@ pub struct Planner {
     tolerance: f64,
     /// Look-ahead distance wanted beyond the current position.
     horizon: f64,
-    /// Lowest path acceleration and jerk of any piece (for the scan distance).
+    /// Floors of the path acceleration and jerk the look-ahead distance is sized with
+    /// (pieces that turn a rotary axis may go below them: `low_ahead`).
     accel_floor: f64,
     jerk_floor: f64,
+    /// The lowest limits of the pieces ahead that turn a rotary axis below the floors.
+    low_ahead: deep::LowAhead,
     waiting: VecDeque<Waiting>,
     /// The vertices of the polyline of linear lines up to the start of the front waiting
     /// element (the split-point fit looks back on them; a bounded number, see `commit.rs`),
@@ -193,6 +197,7 @@ impl Planner {
             horizon,
             accel_floor,
             jerk_floor,
+            low_ahead: deep::LowAhead::default(),
             waiting: VecDeque::new(),
             vertices: Vec::new(),
             pieces: VecDeque::new(),

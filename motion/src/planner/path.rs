@@ -16,6 +16,10 @@
 //!   whose jerk is effectively unlimited); otherwise a blend as at any corner;
 //! * tolerance 0, rotary-only moves, a turn sharper than 120°, or no blend found: exact
 //!   stop at the corner;
+//! * next to an element that turns a rotary axis along its linear motion (whose turn per
+//!   millimetre can put the blend's limits far below its neighbours'): exact stop where
+//!   that is estimated to take less time than slowing into the blend and out of it and the
+//!   rotary axes at least double the latter (not between split points: dense code);
 //! * otherwise a [`Quintic`] blend whose distance from the programmed contour is checked
 //!   against the tolerance ([`blend_within`]); it is made as long as the tolerance allows,
 //!   at most half of each element. A blend whose curvature varies along it (through a
@@ -41,6 +45,7 @@ use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, Line, Metric, PathPoint, Segment};
 use crate::limits::{Grip, Headroom, LimitError, PieceLimits, path_limits};
+use crate::profile::Ramp;
 use klar_interp::{Op, Pose, SourceLoc};
 
 /// Largest feed override, as a factor: path limits are prepared for it.
@@ -492,6 +497,74 @@ fn too_slow(
         || b.acceleration < SLOW_BLEND * l.acceleration.min(r.acceleration)
 }
 
+/// True when the element turns a rotary axis along its linear motion.
+fn turns_rotary(e: &Element) -> bool {
+    e.segment.metric() == Metric::Linear && Metric::Rotary.norm(&e.segment.bounds().d1) > 0.0
+}
+
+/// Share by which the rotary axes must at least slow down the way through a blend (its
+/// estimated time against that of the same blend with the linear axes' limits alone)
+/// before an exact stop may replace it.
+const ROTARY_COST: f64 = 2.0;
+
+/// True when stopping at the corner takes less time than slowing down into the blend and
+/// speeding up out of it, and the rotary axes are what makes the blend slow (a corner next
+/// to a move that turns a rotary axis, whose turn per millimetre can put the blend's limits
+/// far below its neighbours').
+///
+/// The estimate: from the speed on `cur` (its top speed, at most the programmed feed) down
+/// to the blend's top speed (with `headroom`, as it will be committed) and on to the speed
+/// on `next`: braking with the acceleration of `cur` and the lower of the two jerks (the
+/// look-ahead brakes into a piece with its jerk), speeding up with the acceleration of
+/// `next` and again the lower jerk; against braking `cur` to rest and speeding `next` up
+/// from rest with their own limits. It is rough for corners that slow the path down to
+/// nearly nothing anyway (those [`too_slow`] settles): the blend must also take at least
+/// [`ROTARY_COST`] times as long as it would if only the linear axes limited it.
+fn stop_is_faster(
+    blend: &Quintic,
+    length: f64,
+    feed: Option<f64>,
+    headroom: Headroom,
+    (cur, next): (&Element, &Element),
+    limits: &[Option<AxisLimits>; 9],
+) -> bool {
+    let time = |from: f64, to: f64, accel: f64, jerk: f64| {
+        Ramp::new(from, 0.0, to, accel, jerk).duration()
+    };
+    // (through the blend, stopping) with the bounds as `keep` leaves them.
+    let estimate = |keep: fn(AxisBounds) -> AxisBounds| -> Option<(f64, f64)> {
+        let get = |b: AxisBounds, len: f64, feed: Option<f64>, h: Headroom| {
+            piece_limits(&keep(b), len, feed, limits, h).ok()
+        };
+        let b = get(blend.bounds(), length, feed, headroom)?;
+        let (lc, ln) = (cur.segment.length(), next.segment.length());
+        let l = get(cur.segment.bounds(), lc, cur.feed, Headroom::Ample)?;
+        let r = get(next.segment.bounds(), ln, next.feed, Headroom::Ample)?;
+        let speed = |top: f64, e: &Element| e.feed.map_or(top, |f| top.min(f));
+        let (vl, vr) = (speed(l.velocity, cur), speed(r.velocity, next));
+        let low = b.velocity.min(vl).min(vr);
+        let through = time(vl, low, l.acceleration, l.jerk.min(b.jerk))
+            + time(low, vr, r.acceleration, r.jerk.min(b.jerk));
+        let stop = time(vl, 0.0, l.acceleration, l.jerk) + time(0.0, vr, r.acceleration, r.jerk);
+        Some((through, stop))
+    };
+    let Some((through, stop)) = estimate(|b| b) else {
+        return true;
+    };
+    let Some((linear, _)) = estimate(without_rotary) else {
+        return true;
+    };
+    through > stop && through > ROTARY_COST * linear
+}
+
+/// The bounds with those of the rotary axes left out.
+fn without_rotary(mut b: AxisBounds) -> AxisBounds {
+    for &i in Metric::Rotary.axes() {
+        (b.d1[i], b.d2[i], b.d3[i], b.wave[i]) = (0.0, 0.0, 0.0, 0.0);
+    }
+    b
+}
+
 /// The split point to give `mid` at its midpoint when it can become one between `prev`
 /// and `next` ([`split_point`]); `tp` and `tm` are the unit tangents at the end of `prev`
 /// and the start of `mid`, `turn` the angle between them.
@@ -603,23 +676,31 @@ fn try_corner(
             if theta > SPLIT_MAX_ANGLE && too_slow(&curve, length, feed, cur, next, limits) {
                 return None;
             }
-            let mut out = Committed::default();
-            push_part(&mut out, cur, cur.trim, len - dl);
             // Blends through split points (dense code) keep one piece each: their
             // curvature there is an estimate, and its noise would only multiply the limits.
+            // Nor are they weighed against a stop: the path runs from blend to blend at
+            // about their speed, not at the top speed of the short lines between.
             let dense = left_fixed.is_some() || right_split.is_some();
             let parts = if !dense && varies(&curve, &a, &b) {
                 ((length / MIN_PART) as usize).clamp(1, BLEND_PARTS)
             } else {
                 1
             };
-            let shape = Shape::Blend(curve);
-            let step = length / parts as f64;
             let headroom = if parts > 1 {
                 Headroom::Lean
             } else {
                 Headroom::Ample
             };
+            if !dense
+                && (turns_rotary(cur) || turns_rotary(next))
+                && stop_is_faster(&curve, length, feed, headroom, (cur, next), limits)
+            {
+                return None;
+            }
+            let mut out = Committed::default();
+            push_part(&mut out, cur, cur.trim, len - dl);
+            let shape = Shape::Blend(curve);
+            let step = length / parts as f64;
             for k in 0..parts {
                 let from = step * k as f64;
                 let to = if k + 1 == parts { length } else { from + step };

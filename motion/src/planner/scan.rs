@@ -2,7 +2,7 @@
 //! the speed limits ahead that can matter within the braking distance ([`speed::Window`]).
 
 use super::speed::{self, Limit, Motion};
-use super::{Marker, Planner};
+use super::{Marker, Planner, deep};
 use crate::limits::Grip;
 
 /// Largest distance (mm) over which a limit may join the one before it.
@@ -60,6 +60,13 @@ impl Planner {
         };
         let floor = Grip::constant(self.accel_floor);
         let mut range = reach_for(&floor, self.jerk_floor);
+        // Pieces ahead that turn a rotary axis may allow far less than the floors (see
+        // `deep`): the window reaches as far as braking with their limits needs.
+        self.low_ahead.pass(s);
+        if !self.low_ahead.is_empty() {
+            let (accel, jerk) = self.low_ahead.lowest((self.accel_floor, self.jerk_floor));
+            range = range.max(deep::reach(&from, accel, jerk, period));
+        }
         let w = &mut self.window;
         w.limits.clear();
         // Acceleration and jerk for the next period: those of the current piece (the
