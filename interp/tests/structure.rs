@@ -224,18 +224,7 @@ fn block_skip_and_labels_after_m30_only_syntax_checked() {
 fn an_endless_loop_without_motion_stops_with_an_error() {
     let text = "0 BEGIN PGM L MM\n1 Q1 = 0\n2 LBL \"LOOP\"\n3 L X+60 Y+Q1 FMAX\n\
                 4 FN 12: IF +Q1 LT +3 GOTO LBL \"LOOP\"\n5 END PGM L MM\n";
-    let interp = klar_interp::Interpreter::from_source("loop.h", text, klar_interp::Pose::ZERO);
-    let mut ops = 0;
-    let mut error = None;
-    for item in interp {
-        match item {
-            Ok(_) => ops += 1,
-            Err(d) => {
-                error = Some(d);
-                break;
-            }
-        }
-    }
+    let (ops, error) = ops_until_error("loop.h", text);
     // The first pass moves to X60 Y0; every later pass moves nowhere.
     assert_eq!(ops, 1);
     let d = error.expect("the loop must end with an error");
@@ -256,18 +245,7 @@ fn an_idle_loop_stops_a_run_where_the_check_stops() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("../fuzz/findings/pipeline_idle_loop_slow.h");
     let text = std::fs::read_to_string(&path).expect("the finding is in the repository");
-    let interp = klar_interp::Interpreter::from_source("idle.h", &text, klar_interp::Pose::ZERO);
-    let mut ops = 0;
-    let mut error = None;
-    for item in interp {
-        match item {
-            Ok(_) => ops += 1,
-            Err(d) => {
-                error = Some(d);
-                break;
-            }
-        }
-    }
+    let (ops, error) = ops_until_error("idle.h", &text);
     assert_eq!(ops, 0);
     let d = error.expect("the loop must end with an error");
     assert_eq!(d.line, 10, "{d}");
@@ -285,4 +263,17 @@ fn an_idle_loop_stops_a_run_where_the_check_stops() {
         "{:?}",
         checked.errors
     );
+}
+
+/// Runs `text` until its first error: the ops before it and the error.
+fn ops_until_error(name: &str, text: &str) -> (usize, Option<klar_interp::Diagnostic>) {
+    let interp = klar_interp::Interpreter::from_source(name, text, klar_interp::Pose::ZERO);
+    let mut ops = 0;
+    for item in interp {
+        match item {
+            Ok(_) => ops += 1,
+            Err(d) => return (ops, Some(d)),
+        }
+    }
+    (ops, None)
 }
