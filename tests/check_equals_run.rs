@@ -10,7 +10,7 @@
 mod common;
 
 use common::{assert_within_limits, max_derivative, run, temp_program};
-use klar::config::{MachineConfig, ToolConfig};
+use klar::config::MachineConfig;
 use klar::runtime::RunError;
 use klar::runtime::guard::{ACCELERATION_MARGIN, VELOCITY_MARGIN};
 use klar::testrun::test_run;
@@ -35,22 +35,6 @@ fn root() -> PathBuf {
 fn machine_file(name: &str) -> MachineConfig {
     let p = root().join("machines").join(name);
     MachineConfig::load(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
-
-/// The built-in mill with a shop tool table of radius-3 tools (as the corpus test uses).
-fn shop_mill() -> MachineConfig {
-    let mut m = MachineConfig::builtin_mill();
-    m.tools = Some(
-        (1..=999)
-            .map(|number| ToolConfig {
-                number,
-                name: None,
-                length: 60.0,
-                radius: 3.0,
-            })
-            .collect(),
-    );
-    m
 }
 
 /// Program files (.h, .i, .nc, any case) in `dir` and one folder down.
@@ -202,7 +186,8 @@ fn every_program_is_refused_by_check_or_runs_within_the_limits() {
     if corpus.is_empty() {
         eprintln!("{}: no corpus here, only the examples", dir.display());
     }
-    let shop = shop_mill();
+    // radius-3 tools, as the corpus test uses
+    let shop = common::shop_mill(3.0);
     for p in &corpus {
         check_then_run(p, &shop, &mut tally);
     }

@@ -9,7 +9,6 @@
 
 mod common;
 
-use klar::config::{MachineConfig, ToolConfig};
 use klar::runtime::{RunOptions, run_program};
 use klar::testrun::test_run;
 use std::path::{Path, PathBuf};
@@ -91,22 +90,6 @@ fn corpus() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus/klartext")
 }
 
-/// The built-in mill with a shop tool table whose tools have radius `radius`.
-fn machine(radius: f64) -> MachineConfig {
-    let mut m = MachineConfig::builtin_mill();
-    m.tools = Some(
-        (1..=999)
-            .map(|number| ToolConfig {
-                number,
-                name: None,
-                length: 60.0,
-                radius,
-            })
-            .collect(),
-    );
-    m
-}
-
 /// Every file of the corpus folder (recursively), relative to it.
 fn files(dir: &Path, base: &Path, out: &mut Vec<String>) {
     let Ok(entries) = std::fs::read_dir(dir) else {
@@ -150,7 +133,7 @@ fn every_corpus_program_is_handled() {
     let (mut ran, mut undecided, mut refused) = (0, 0, 0);
     for (file, expect) in CASES {
         let path = dir.join(file);
-        let machine = machine(match expect {
+        let machine = common::shop_mill(match expect {
             Expect::RunsWithRadius(r) => *r,
             _ => 3.0,
         });

@@ -255,6 +255,24 @@ fn a_corner_between_moves_turning_c_at_different_rates_stops_within_every_limit(
     );
 }
 
+/// Block 2: a spline from `p1` to `p2` with X linear in the spline parameter (`K1X = k1x`)
+/// and C = 30·u³ of the way (K3/K2/K1 of C: −30, 90, −90).
+fn x_c_spline(p1: Pose, p2: Pose, k1x: f64, feed: Feed) -> Op {
+    let k = |axis, k: [f64; 3]| SplineAxis { axis, k };
+    op(
+        2,
+        OpKind::Spline {
+            from: p1,
+            to: p2,
+            axes: vec![
+                k(AxisLetter::X, [0.0, 0.0, k1x]),
+                k(AxisLetter::C, [-30.0, 90.0, -90.0]),
+            ],
+            feed,
+        },
+    )
+}
+
 #[test]
 fn a_spline_turning_c_after_a_fast_line_is_seen_in_time() {
     // A line along X at F3000, then a spline that continues it without a corner (same
@@ -266,19 +284,7 @@ fn a_spline_turning_c_after_a_fast_line_is_seen_in_time() {
     let p2 = pose(1.0, 0.0, 0.0, 0.0, 30.0);
     // Coordinates as K3·t³ + K2·t² + K1·t + end with t = 1 − u: X = 1 − t, and
     // C = 30·(1 − t)³ = 30 − 90t + 90t² − 30t³.
-    let k = |axis, k: [f64; 3]| SplineAxis { axis, k };
-    let spline = op(
-        2,
-        OpKind::Spline {
-            from: p1,
-            to: p2,
-            axes: vec![
-                k(AxisLetter::X, [0.0, 0.0, -1.0]),
-                k(AxisLetter::C, [-30.0, 90.0, -90.0]),
-            ],
-            feed: Feed::Rate(50.0),
-        },
-    );
+    let spline = x_c_spline(p1, p2, -1.0, Feed::Rate(50.0));
     let r = run_within_limits(p0, vec![line(1, p0, p1, Feed::Rate(50.0)), spline]);
     assert_eq!(r.samples.last().expect("samples").pose, p2);
 }
@@ -292,19 +298,7 @@ fn a_spline_turning_c_too_sharply_to_brake_for_from_the_look_ahead_gets_a_stop()
     let p0 = pose(-2000.0, 0.0, 0.0, 0.0, 0.0);
     let p1 = pose(0.0, 0.0, 0.0, 0.0, 0.0);
     let p2 = pose(0.05, 0.0, 0.0, 0.0, 30.0);
-    let k = |axis, k: [f64; 3]| SplineAxis { axis, k };
-    let spline = op(
-        2,
-        OpKind::Spline {
-            from: p1,
-            to: p2,
-            axes: vec![
-                k(AxisLetter::X, [0.0, 0.0, -0.05]),
-                k(AxisLetter::C, [-30.0, 90.0, -90.0]),
-            ],
-            feed: Feed::Rapid,
-        },
-    );
+    let spline = x_c_spline(p1, p2, -0.05, Feed::Rapid);
     // Moves after it, so that the spline waits for its corner after the line is committed.
     let p3 = pose(10.0, 0.0, 0.0, 0.0, 30.0);
     let p4 = pose(10.0, 10.0, 0.0, 0.0, 30.0);

@@ -212,3 +212,19 @@ pub fn klar_cli(args: &[&str]) -> (bool, String, String) {
 pub fn arg(p: &Path) -> &str {
     p.to_str().expect("UTF-8 path")
 }
+
+/// The built-in mill with a shop tool table: tools 1 to 999, length 60 mm, radius `radius`.
+pub fn shop_mill(radius: f64) -> MachineConfig {
+    let mut m = MachineConfig::builtin_mill();
+    m.tools = Some(
+        (1..=999)
+            .map(|number| klar::config::ToolConfig {
+                number,
+                name: None,
+                length: 60.0,
+                radius,
+            })
+            .collect(),
+    );
+    m
+}

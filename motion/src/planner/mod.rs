@@ -246,8 +246,7 @@ impl Planner {
             return self.config.limits;
         };
         let straight = matches!(shape, Shape::Element(Segment::Line(_)));
-        let turns = (0..9).any(|i| letter(i).is_rotary() && bounds.d1[i] * length > 1e-9);
-        if !turns {
+        if !deep::turns_rotary(bounds, length) {
             return self.config.limits;
         }
         let tip = |s: f64| {
