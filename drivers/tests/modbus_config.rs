@@ -182,3 +182,31 @@ fn embeds_in_a_kind_tagged_backend_table() {
     let typo = tagged.replace("poll_period", "pol_period");
     assert!(toml::from_str::<Backend>(&typo).is_err());
 }
+
+/// A pseudo-terminal has no parity bit: Linux clears PARENB on a pty (or refuses the
+/// setting outright). Asking for even parity on one is an error naming the port and the
+/// setting, never a line that silently runs without parity; parity none opens.
+#[test]
+fn a_port_that_cannot_keep_even_parity_is_refused() {
+    use serialport::SerialPort as _;
+    let (_master, slave) = serialport::TTYPort::pair().expect("pseudo-terminal pair");
+    let path = slave.name().expect("the pty has a name");
+    drop(slave);
+    let runtime = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .expect("runtime");
+    let _entered = runtime.enter();
+    let mut line = SerialLineConfig::new(path.clone());
+    line.parity = Parity::Even;
+    let message = match klar_drivers::modbus::link::open_serial(&line) {
+        Ok(_) => panic!("even parity on {path} was accepted"),
+        Err(e) => e.to_string(),
+    };
+    assert!(
+        message.contains(&path) && message.contains("parity") && message.contains("even"),
+        "{message}"
+    );
+    line.parity = Parity::None;
+    klar_drivers::modbus::link::open_serial(&line).expect("parity none opens on a pty");
+}

@@ -79,6 +79,33 @@ pub enum ModbusError {
         /// The last failure.
         last: Box<ModbusError>,
     },
+    /// The port opened but does not keep a line setting: it reads back something else
+    /// than was set (a pseudo-terminal, for one, has no parity bit).
+    #[error(
+        "serial port {port} cannot be set to {setting} {wanted}: it reads back {got} \
+         (a pseudo-terminal or an adapter without this setting); use a port that supports \
+         it or configure the devices and klar for what the port can do"
+    )]
+    LineSetting {
+        /// Port path from the configuration.
+        port: String,
+        /// Which setting, e.g. "parity".
+        setting: &'static str,
+        /// What the configuration asks for.
+        wanted: String,
+        /// What the port reports after setting it.
+        got: String,
+    },
+    /// A spindle stop could not be confirmed by the device within the time allowed.
+    #[error("{device} did not confirm the stop within {waited:?}: {reason}")]
+    StopUnconfirmed {
+        /// The device, e.g. "spindle VFD (Modbus unit 1 on /dev/ttyUSB1)".
+        device: String,
+        /// How long the stop was tried.
+        waited: Duration,
+        /// The last thing that went wrong.
+        reason: String,
+    },
     /// The configuration is not usable.
     #[error("invalid Modbus configuration: {0}")]
     Config(String),

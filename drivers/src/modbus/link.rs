@@ -5,7 +5,7 @@ use std::time::Duration;
 
 use tokio_modbus::client::{Context, Reader, Writer};
 use tokio_modbus::prelude::Slave;
-use tokio_serial::{SerialPortBuilderExt, SerialStream};
+use tokio_serial::{SerialPort, SerialPortBuilderExt, SerialStream};
 use tracing::{debug, warn};
 
 use super::{ModbusError, Parity, RegisterTable, SerialLineConfig};
@@ -102,7 +102,10 @@ impl std::fmt::Debug for ModbusLink {
     }
 }
 
-/// Opens the serial port of `line` as an async stream (8 data bits).
+/// Opens the serial port of `line` as an async stream (8 data bits) and reads the line
+/// settings back: a port that does not keep the parity or the stop bits it was given (a
+/// pseudo-terminal has no parity bit) is refused with [`ModbusError::LineSetting`] rather
+/// than used with a framing the devices do not expect.
 pub fn open_serial(line: &SerialLineConfig) -> Result<SerialStream, ModbusError> {
     line.validate()?;
     let parity = match line.parity {
@@ -115,7 +118,7 @@ pub fn open_serial(line: &SerialLineConfig) -> Result<SerialStream, ModbusError>
     } else {
         tokio_serial::StopBits::One
     };
-    tokio_serial::new(&line.port, line.baud)
+    let stream = tokio_serial::new(&line.port, line.baud)
         .data_bits(tokio_serial::DataBits::Eight)
         .parity(parity)
         .stop_bits(stop_bits)
@@ -123,8 +126,62 @@ pub fn open_serial(line: &SerialLineConfig) -> Result<SerialStream, ModbusError>
         .open_native_async()
         .map_err(|e| ModbusError::Open {
             port: line.port.clone(),
-            reason: e.to_string(),
-        })
+            reason: format!(
+                "{e} (asked for {} baud, 8 data bits, parity {}, {} stop bit(s))",
+                line.baud,
+                parity_name(parity),
+                line.stop_bits
+            ),
+        })?;
+    check_line(&line.port, &stream, parity, stop_bits)?;
+    Ok(stream)
+}
+
+fn parity_name(parity: tokio_serial::Parity) -> &'static str {
+    match parity {
+        tokio_serial::Parity::None => "none",
+        tokio_serial::Parity::Even => "even",
+        tokio_serial::Parity::Odd => "odd",
+    }
+}
+
+fn stop_bits_name(bits: tokio_serial::StopBits) -> &'static str {
+    match bits {
+        tokio_serial::StopBits::One => "1",
+        tokio_serial::StopBits::Two => "2",
+    }
+}
+
+/// Compares what the open port reports with what was set.
+fn check_line(
+    port: &str,
+    stream: &SerialStream,
+    parity: tokio_serial::Parity,
+    stop_bits: tokio_serial::StopBits,
+) -> Result<(), ModbusError> {
+    let unreadable = |what: &str, e: tokio_serial::Error| ModbusError::Open {
+        port: port.to_string(),
+        reason: format!("cannot read back the {what}: {e}"),
+    };
+    let got = stream.parity().map_err(|e| unreadable("parity", e))?;
+    if got != parity {
+        return Err(ModbusError::LineSetting {
+            port: port.to_string(),
+            setting: "parity",
+            wanted: parity_name(parity).into(),
+            got: parity_name(got).into(),
+        });
+    }
+    let got = stream.stop_bits().map_err(|e| unreadable("stop bits", e))?;
+    if got != stop_bits {
+        return Err(ModbusError::LineSetting {
+            port: port.to_string(),
+            setting: "stop bits",
+            wanted: stop_bits_name(stop_bits).into(),
+            got: stop_bits_name(got).into(),
+        });
+    }
+    Ok(())
 }
 
 impl ModbusLink {
