@@ -41,8 +41,14 @@ pub enum MachineError {
 }
 
 /// The spindle backend.
+///
+/// Dropping it (every way out of a run, also a panic unwinding) stops the spindle and waits
+/// for the device to confirm, unless [`Spindle::stop`] was already called since the last
+/// command to turn; an unconfirmed stop prints a warning that the spindle may still turn.
 pub struct Spindle {
     backend: Box<dyn SpindleBackend>,
+    /// The device in words, for messages.
+    name: String,
     /// The last speed commanded, signed rpm.
     commanded: f64,
     /// Highest speed, rpm.
@@ -50,14 +56,63 @@ pub struct Spindle {
     /// How long reaching speed may take, s.
     pub at_speed_timeout: f64,
     last: SpindleFeedback,
+    /// The sign of the last command to turn: 1 forward, -1 reverse, 0 never turned.
+    direction: f64,
+    /// A confirmed stop was tried since the last command to turn.
+    stop_tried: bool,
+    /// Why the last confirmed stop failed, if it did.
+    unconfirmed: Option<String>,
 }
 
 impl Spindle {
     /// Commands a signed speed in rpm (positive M3, negative M4, zero M5).
     pub fn command(&mut self, rpm: f64) -> Result<(), BackendError> {
         self.backend.command(rpm)?;
+        if rpm != 0.0 {
+            self.stop_tried = false;
+            self.direction = rpm.signum();
+        }
         self.commanded = rpm;
         Ok(())
+    }
+
+    /// Commands the spindle to stop and waits (bounded) until the device confirms it. The
+    /// error says why it could not be confirmed; [`Spindle::stop_warning`] keeps it.
+    pub fn stop(&mut self) -> Result<(), BackendError> {
+        self.stop_tried = true;
+        self.commanded = 0.0;
+        let result = self.backend.stop_confirmed();
+        self.unconfirmed = result.as_ref().err().map(|e| match e {
+            BackendError::Communication(m) => m.clone(),
+            other => format!("{}: {other}", self.name),
+        });
+        result
+    }
+
+    /// The loud warning of a stop that could not be confirmed, if the last stop was not.
+    pub fn stop_warning(&self) -> Option<String> {
+        self.unconfirmed
+            .as_ref()
+            .map(|why| format!("WARNING: {why}: the spindle may still turn"))
+    }
+
+    /// The device in words, e.g. "spindle VFD (Modbus unit 1 on /dev/ttyUSB1)".
+    pub fn name(&self) -> &str {
+        &self.name
+    }
+
+    /// A spindle fault in words: the device, the fault and what the backend knows more.
+    pub fn describe_fault(&self, fault: &klar_motion::AxisFault) -> String {
+        match self.backend.fault_detail() {
+            Some(detail) => format!("{}: {fault}: {detail}", self.name),
+            None => format!("{}: {fault}", self.name),
+        }
+    }
+
+    /// The sign of the last command to turn: 1 forward (M3), -1 reverse (M4), 0 before
+    /// the first.
+    pub fn direction(&self) -> f64 {
+        self.direction
     }
 
     /// The last commanded speed, signed rpm.
@@ -68,6 +123,18 @@ impl Spindle {
     /// The feedback of the last cycle.
     pub fn feedback(&self) -> &SpindleFeedback {
         &self.last
+    }
+}
+
+impl Drop for Spindle {
+    fn drop(&mut self) {
+        if !self.stop_tried && self.stop().is_err() {
+            // The last word of an exit that did not go through the run's end (a panic
+            // unwinding, a run dropped unfinished): nobody else can report it.
+            if let Some(w) = self.stop_warning() {
+                eprintln!("{w}");
+            }
+        }
     }
 }
 
@@ -296,6 +363,21 @@ impl MachineIo {
         let spindle = match &config.spindle {
             None => None,
             Some(s) => {
+                let name = match &s.backend {
+                    SpindleBackendConfig::Sim(_) => "simulated spindle".to_string(),
+                    SpindleBackendConfig::Canopen(c) => {
+                        format!("spindle drive (CANopen bus {})", c.bus)
+                    }
+                    SpindleBackendConfig::Modbus(m) => format!(
+                        "spindle VFD (Modbus unit {} on {})",
+                        m.vfd.unit,
+                        if m.simulate.is_some() {
+                            "a simulated line"
+                        } else {
+                            m.vfd.serial.port.as_str()
+                        }
+                    ),
+                };
                 let backend: Box<dyn SpindleBackend> = match &s.backend {
                     SpindleBackendConfig::Sim(sim) => {
                         Box::new(crate::faults::ScheduledSpindle::new(
@@ -323,10 +405,16 @@ impl MachineIo {
                 };
                 Some(Spindle {
                     backend,
+                    name,
                     commanded: 0.0,
                     max_rpm: s.max_rpm,
                     at_speed_timeout: s.at_speed_timeout,
                     last: SpindleFeedback::default(),
+                    // Never commanded to turn: nothing to stop (the VFD backend stops
+                    // the device when it opens).
+                    direction: 0.0,
+                    stop_tried: true,
+                    unconfirmed: None,
                 })
             }
         };
@@ -359,12 +447,12 @@ impl MachineIo {
         self.slots.iter_mut().try_for_each(|s| s.backend.enable())
     }
 
-    /// Stops the spindle and disables every backend (best effort: all are tried, the first
-    /// error is returned).
+    /// Stops the spindle (confirmed by the device where it can, see [`Spindle::stop`]) and
+    /// disables every backend (best effort: all are tried, the first error is returned).
     pub fn disable(&mut self) -> Result<(), BackendError> {
         let mut first = Ok(());
         if let Some(s) = &mut self.spindle
-            && let Err(e) = s.command(0.0)
+            && let Err(e) = s.stop()
         {
             first = Err(e);
         }

@@ -423,7 +423,7 @@ fn cmd_run(
             say!("underruns:    {}", report.underruns);
         }
     }
-    match error {
+    let code = match error {
         None => ExitCode::SUCCESS,
         // Reported above; the exit code tells which signal stopped the run.
         Some(RunError::Operator { .. }) => signals
@@ -433,6 +433,18 @@ fn cmd_run(
             eprintln!("stopped: {e}");
             ExitCode::FAILURE
         }
+    };
+    // The last line, whatever else happened: the spindle may still turn.
+    match &report.spindle_warning {
+        Some(w) => {
+            eprintln!("{w}");
+            if code == ExitCode::SUCCESS {
+                ExitCode::FAILURE
+            } else {
+                code
+            }
+        }
+        None => code,
     }
 }
 

@@ -78,6 +78,9 @@ pub struct RunReport {
     pub realtime: bool,
     /// How the run was stopped early by a fault or a request, if it was.
     pub stop: Option<StopReport>,
+    /// Set when the spindle's stop at the end of the run could not be confirmed by its
+    /// device: a warning that the spindle may still turn.
+    pub spindle_warning: Option<String>,
 }
 
 /// A run that ended early: the error plus what was measured until then.
@@ -210,7 +213,7 @@ impl Run<'_, '_> {
             && let Some(s) = self.io.spindle_mut()
             && let Some(fault) = s.feedback().fault.clone()
         {
-            let message = fault.to_string();
+            let message = s.describe_fault(&fault);
             tracing::error!(line = self.line, "spindle fault: {message}: feed hold");
             self.begin_path_stop(
                 StopCause::Spindle(message.clone()),
@@ -625,6 +628,7 @@ impl<'a, 'w> Run<'a, 'w> {
     pub fn finish(mut self, error: Option<RunError>) -> Result<RunReport, Box<RunFailure>> {
         self.report.blocks = self.ops.blocks_executed();
         let disabled = self.io.disable();
+        self.report.spindle_warning = self.io.spindle_mut().and_then(|s| s.stop_warning());
         let report = self.report;
         let trace_done = match self.trace {
             Some(t) => t.finish(),

@@ -152,4 +152,19 @@ pub trait SpindleBackend {
 
     /// Advances by one servo cycle at time `t` and reports the spindle's state.
     fn cycle(&mut self, t: f64) -> Result<SpindleFeedback, BackendError>;
+
+    /// Commands the spindle to stop and, where the device can say so, waits (bounded) until
+    /// it confirms: the stop command acknowledged and the device no longer driving the
+    /// spindle. An error means the stop is not confirmed and the spindle may still turn.
+    /// The default commands 0 rpm: for backends whose speed follows from their own cycle
+    /// (simulated spindles, drives disabled with their bus).
+    fn stop_confirmed(&mut self) -> Result<(), BackendError> {
+        self.command(0.0)
+    }
+
+    /// Details of the present fault beyond [`AxisFault`] (e.g. the failed request), if the
+    /// backend knows them.
+    fn fault_detail(&self) -> Option<String> {
+        None
+    }
 }

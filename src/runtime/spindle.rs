@@ -1,5 +1,12 @@
 //! Spindle commands reaching the servo loop: speeds checked against the machine, the wait
 //! for at-speed after a command to turn, and constant surface speed following the tool radius.
+//!
+//! A change of direction (M3 to M4 directly, or M4 while the spindle still turns forward
+//! after an M5) first commands 0 rpm and waits until the spindle reports it has stopped
+//! (the device acknowledged the stop and the measured speed is within the at-speed window
+//! of zero), at most `at_speed_timeout`; only then the new direction is commanded. A drive
+//! that is polled (a Modbus VFD) would otherwise see only the newest command and go from
+//! forward to reverse without the stop.
 
 use super::stream::OpStream;
 use super::{Run, RunError};
@@ -72,24 +79,56 @@ impl Run<'_, '_> {
         if signed == spindle.commanded() {
             return Ok(());
         }
-        spindle.command(signed)?;
+        let reversing = signed != 0.0
+            && (spindle.direction() * signed < 0.0 || spindle.feedback().rpm * signed < 0.0);
         let timeout = spindle.at_speed_timeout;
+        if reversing {
+            if spindle.commanded() != 0.0 {
+                spindle.command(0.0)?;
+            }
+            self.wait_at_speed(loc, timeout, |rpm| {
+                format!(
+                    "did not stop within {timeout} s before reversing to {signed} rpm \
+                     (still at {rpm:.0} rpm)"
+                )
+            })?;
+        }
+        let Some(spindle) = self.io.spindle_mut() else {
+            return Ok(());
+        };
+        spindle.command(signed)?;
         if signed == 0.0 {
             return Ok(());
         }
+        self.wait_at_speed(loc, timeout, |_| {
+            format!("did not reach {signed} rpm within {timeout} s")
+        })
+    }
+
+    /// Holds the axes until the spindle reports at-speed for its present command, at most
+    /// `timeout` s; `late` words the error from the measured speed.
+    fn wait_at_speed(
+        &mut self,
+        loc: SourceLoc,
+        timeout: f64,
+        late: impl Fn(f64) -> String,
+    ) -> Result<(), RunError> {
         let waited_from = self.t;
         loop {
             self.hold_cycle()?;
             if let Some(pending) = self.stopping.take() {
                 return Err(self.end_path_stop(pending));
             }
-            let at_speed = self.io.spindle_mut().is_some_and(|s| s.feedback().at_speed);
+            let (at_speed, rpm) = self
+                .io
+                .spindle_mut()
+                .map_or((true, 0.0), |s| (s.feedback().at_speed, s.feedback().rpm));
             if at_speed {
                 break;
             }
             if self.t - waited_from > timeout {
                 return Err(RunError::Spindle {
-                    message: format!("did not reach {signed} rpm within {timeout} s"),
+                    message: late(rpm),
                     line: loc.line,
                 });
             }

@@ -5,9 +5,16 @@
 //! clears once the runtime commands 0 rpm and the VFD answers again. A VFD fault is
 //! reported as [`AxisFault::Drive`] with the VFD's code; it is cleared with
 //! [`ModbusVfd::reset_fault`].
+//!
+//! Stopping: [`SpindleBackend::stop_confirmed`] writes the stop and reads the status back
+//! until the VFD no longer drives the spindle (Delta: not in the run state; generic: the
+//! running bit clear), retrying within a bounded time; an error says the stop could not be
+//! confirmed. When the backend is dropped (every exit of the program, also a panic
+//! unwinding) the worker does the same unless a stop was already tried since the last
+//! speed command, and logs an error when it cannot confirm it.
 
 use std::thread::JoinHandle;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 use klar_motion::{AxisFault, BackendError, SpindleBackend, SpindleFeedback};
 use tokio::sync::{mpsc, watch};
@@ -40,6 +47,8 @@ pub struct VfdSnapshot {
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Command {
     ResetFault,
+    /// Write the stop and read the status back until the VFD confirms it.
+    Stop,
 }
 
 /// A Modbus RTU spindle VFD.
@@ -51,6 +60,10 @@ pub struct ModbusVfd {
     at_speed_fraction: f64,
     at_speed_min_rpm: f64,
     wait: Duration,
+    /// How long a confirmed stop may take, with a margin for the last transaction.
+    stop_wait: Duration,
+    /// "spindle VFD (Modbus unit 1 on /dev/ttyUSB1)", for messages.
+    device: String,
     thread: Option<JoinHandle<()>>,
 }
 
@@ -74,6 +87,9 @@ impl ModbusVfd {
         let (rpm, rpm_rx) = watch::channel(0.0);
         let shared = snapshot.clone();
         let name = format!("modbus-vfd-{}", config.unit);
+        let device = describe(config);
+        let stop_budget = stop_budget(config, poll);
+        let worker_device = device.clone();
         let thread = spawn(&name, config.serial.clone(), config.unit, move |link| {
             let worker = VfdWorker {
                 link,
@@ -84,8 +100,12 @@ impl ModbusVfd {
                 status: None,
                 comm_fault: None,
                 vfd_fault: None,
+                device: worker_device,
+                poll,
+                stop_budget,
+                stop_tried: false,
             };
-            worker.run(command_rx, poll)
+            worker.run(command_rx)
         })?;
         Ok(Self {
             commands: Some(commands),
@@ -95,8 +115,15 @@ impl ModbusVfd {
             at_speed_fraction: config.at_speed_fraction,
             at_speed_min_rpm: config.at_speed_min_rpm,
             wait: command_wait(&config.serial, 4, poll),
+            stop_wait: stop_budget.saturating_add(command_wait(&config.serial, 2, poll)),
+            device,
             thread: Some(thread),
         })
+    }
+
+    /// The device in words: "spindle VFD (Modbus unit 1 on /dev/ttyUSB1)".
+    pub fn device(&self) -> &str {
+        &self.device
     }
 
     /// What the worker last learned about the VFD.
@@ -128,6 +155,20 @@ impl Drop for ModbusVfd {
             let _ = t.join();
         }
     }
+}
+
+/// "spindle VFD (Modbus unit 1 on PORT)".
+fn describe(config: &ModbusVfdConfig) -> String {
+    format!(
+        "spindle VFD (Modbus unit {} on {})",
+        config.unit, config.serial.port
+    )
+}
+
+/// How long a confirmed stop is tried: two rounds of the stop writes and the status read,
+/// each transaction with all its retries, plus a poll period.
+fn stop_budget(config: &ModbusVfdConfig, poll: Duration) -> Duration {
+    command_wait(&config.serial, 6, poll)
 }
 
 impl SpindleBackend for ModbusVfd {
@@ -163,6 +204,27 @@ impl SpindleBackend for ModbusVfd {
             fault: snap.fault.clone(),
         })
     }
+
+    fn stop_confirmed(&mut self) -> Result<(), BackendError> {
+        self.rpm.send_replace(0.0);
+        let commands = self.commands.as_ref().ok_or_else(|| {
+            BackendError::Communication(format!(
+                "{}: backend closed, stop not confirmed",
+                self.device
+            ))
+        })?;
+        call(commands, Command::Stop, self.stop_wait).map_err(|e| match e {
+            e @ ModbusError::StopUnconfirmed { .. } => BackendError::Communication(e.to_string()),
+            other => BackendError::Communication(format!(
+                "{} did not confirm the stop: {other}",
+                self.device
+            )),
+        })
+    }
+
+    fn fault_detail(&self) -> Option<String> {
+        self.snapshot.lock().last_error.clone()
+    }
 }
 
 struct VfdWorker {
@@ -174,11 +236,16 @@ struct VfdWorker {
     status: Option<VfdStatus>,
     comm_fault: Option<String>,
     vfd_fault: Option<u16>,
+    device: String,
+    poll: Duration,
+    stop_budget: Duration,
+    /// A confirmed stop was tried since the last speed command.
+    stop_tried: bool,
 }
 
 impl VfdWorker {
-    async fn run(mut self, mut commands: mpsc::UnboundedReceiver<Call<Command>>, poll: Duration) {
-        let mut ticker = tokio::time::interval(poll);
+    async fn run(mut self, mut commands: mpsc::UnboundedReceiver<Call<Command>>) {
+        let mut ticker = tokio::time::interval(self.poll);
         ticker.set_missed_tick_behavior(MissedTickBehavior::Delay);
         loop {
             tokio::select! {
@@ -186,6 +253,7 @@ impl VfdWorker {
                     let Some(call) = call else { break };
                     let result = match call.command {
                         Command::ResetFault => self.reset().await,
+                        Command::Stop => self.stop_confirmed().await,
                     };
                     let _ = call.reply.send(result);
                     self.poll_once().await;
@@ -193,13 +261,78 @@ impl VfdWorker {
                 _ = ticker.tick() => self.poll_once().await,
             }
         }
-        // Leaving: stop the spindle (best effort).
-        if self.written.is_some_and(|w| w != 0.0) {
-            let _ = self.write(0.0).await;
+        // Leaving (the backend was dropped, also while a panic unwinds): stop the spindle
+        // unless that was tried since the last speed command, whatever the link's state.
+        if !self.stop_tried
+            && let Err(e) = self.stop_confirmed().await
+        {
+            error!(unit = self.link.unit(), "{e}: the spindle may still turn");
         }
     }
 
+    /// Writes the stop (until acknowledged) and reads the status until the VFD no longer
+    /// drives the spindle, every poll period, within the stop budget.
+    async fn stop_confirmed(&mut self) -> Result<(), ModbusError> {
+        self.stop_tried = true;
+        let started = Instant::now();
+        let deadline = started + self.stop_budget;
+        let mut acknowledged = false;
+        let mut last = String::from("no answer");
+        loop {
+            if !acknowledged {
+                match self.write(0.0).await {
+                    Ok(()) => acknowledged = true,
+                    Err(e) => last = e.to_string(),
+                }
+            }
+            if acknowledged {
+                match self.read_status().await {
+                    Ok(Some(status)) => {
+                        self.status = Some(status);
+                        if !status.running {
+                            info!(
+                                unit = self.link.unit(),
+                                rpm = status.rpm,
+                                "VFD confirms the stop"
+                            );
+                            self.publish();
+                            return Ok(());
+                        }
+                        last = format!(
+                            "the stop was acknowledged but the VFD still reports running at \
+                             {:.0} rpm",
+                            status.rpm
+                        );
+                    }
+                    Ok(None) => last = "the status registers could not be decoded".into(),
+                    Err(e) => last = e.to_string(),
+                }
+            }
+            if Instant::now() + self.poll >= deadline {
+                break;
+            }
+            tokio::time::sleep(self.poll).await;
+        }
+        self.publish();
+        Err(ModbusError::StopUnconfirmed {
+            device: self.device.clone(),
+            waited: started.elapsed(),
+            reason: last,
+        })
+    }
+
+    async fn read_status(&mut self) -> Result<Option<VfdStatus>, ModbusError> {
+        let (table, addresses) = self.profile.status_addresses();
+        let blocks = plan_reads(&addresses, 8);
+        let image = read_image(&mut self.link, table, &blocks).await?;
+        Ok(self.profile.decode(&image))
+    }
+
     async fn write(&mut self, rpm: f64) -> Result<(), ModbusError> {
+        if rpm != 0.0 {
+            // From the first byte of a run command on, the VFD may turn.
+            self.stop_tried = false;
+        }
         for (address, value) in self.profile.command_writes(rpm) {
             self.link.write_single(address, value).await?;
         }
@@ -256,10 +389,7 @@ impl VfdWorker {
         if self.written != Some(target) {
             self.write(target).await?;
         }
-        let (table, addresses) = self.profile.status_addresses();
-        let blocks = plan_reads(&addresses, 8);
-        let image = read_image(&mut self.link, table, &blocks).await?;
-        let status = self.profile.decode(&image);
+        let status = self.read_status().await?;
         if let Some(code) = status.and_then(|s| s.fault_code)
             && self.vfd_fault.is_none()
         {
@@ -287,7 +417,7 @@ impl VfdWorker {
         } else {
             self.vfd_fault.map(|code| AxisFault::Drive {
                 code: u32::from(code),
-                text: format!("VFD unit {} reports fault code {code}", self.link.unit()),
+                text: format!("{} reports fault code {code}", self.device),
             })
         };
         snap.last_error.clone_from(&self.comm_fault);
