@@ -224,3 +224,27 @@ fn even_parity_on_a_port_that_cannot_keep_it_is_refused() {
     std::thread::sleep(Duration::from_millis(100));
     assert!(command_writes(&peer.log()).is_empty());
 }
+
+/// A panic while the spindle turns: unwinding drops the machine's I/O, whose spindle guard
+/// commands the stop and confirms it before the process goes on.
+#[test]
+fn unwinding_a_panic_stops_the_spindle_and_confirms_it() {
+    let mut peer = VfdPeer::start("unwind", 2000.0);
+    let config = klar::config::MachineConfig::load(&peer.machine("none")).expect("machine");
+    let peer_ref = &peer;
+    let unwound = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        let mut io = klar::machine::MachineIo::open(&config).expect("the VFD opens");
+        let spindle = io.spindle_mut().expect("a spindle");
+        spindle.command(3000.0).expect("M3 S3000");
+        peer_ref.wait_log("the VFD at 50 Hz", |e| {
+            output_frequency_is(e, |f| f == 5_000)
+        });
+        panic!("a bug while the spindle turns");
+    }));
+    assert!(unwound.is_err());
+    let log = peer.log();
+    let at_speed = find(&log, 0, |e| output_frequency_is(e, |f| f == 5_000)).expect("at speed");
+    assert_stop_confirmed_after(&log, at_speed);
+    let exit = peer.stop_server();
+    assert_eq!(exit["run"], false, "{exit}");
+}

@@ -97,7 +97,7 @@ pub enum ModbusError {
         got: String,
     },
     /// A spindle stop could not be confirmed by the device within the time allowed.
-    #[error("{device} did not confirm the stop within {waited:?}: {reason}")]
+    #[error("{device} did not confirm the stop within {waited:.1?}: {reason}")]
     StopUnconfirmed {
         /// The device, e.g. "spindle VFD (Modbus unit 1 on /dev/ttyUSB1)".
         device: String,
