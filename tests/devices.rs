@@ -270,9 +270,9 @@ rpm_per_hz = 60.0
     let (result, _) = run(&path, &m);
     result.unwrap_or_else(|f| panic!("{}", f.error));
     // 6000 rpm at 60 rpm/Hz = 100.00 Hz = 10000 in the Delta map's 0.01 Hz units; 0x12 runs
-    // forward, 0x22 reverse, 0x01 stops (the Delta communication map). The VFD is polled
-    // with the latest command, so the M5 between M3 and M4 (no wait for standstill) may be
-    // overtaken by the M4; the final M5 must arrive.
+    // forward, 0x22 reverse, 0x01 stops (the Delta communication map). The M4 waits until
+    // the VFD has stopped after the M5, so the stop reaches the VFD between the two
+    // directions; the final M5 must arrive.
     let w = peer.writes();
     let pos = |pair: (u64, u64), from: usize| {
         w[from..]
@@ -283,7 +283,8 @@ rpm_per_hz = 60.0
     };
     let speed = pos((0x2001, 10_000), 0);
     let fwd = pos((0x2000, 0x12), speed);
-    let rev = pos((0x2000, 0x22), fwd);
+    let between = pos((0x2000, 0x01), fwd);
+    let rev = pos((0x2000, 0x22), between);
     let stop = pos((0x2000, 0x01), rev);
     assert_eq!(stop, w.len() - 1, "the last write stops the VFD: {w:x?}");
 }
