@@ -316,9 +316,9 @@ impl MachineLoop {
                 Err(e) => break Some(e),
             }
         };
-        let (error, stop) = match run.finish(outcome) {
-            Ok(report) => (None, report.stop),
-            Err(f) => (Some(f.error), f.report.stop),
+        let (error, stop, spindle_warning) = match run.finish(outcome) {
+            Ok(report) => (None, report.stop, report.spindle_warning),
+            Err(f) => (Some(f.error), f.report.stop, f.report.spindle_warning),
         };
         self.end_with(error, &path);
         // How the safety monitor brought the machine to rest, under the fault message.
@@ -329,6 +329,15 @@ impl MachineLoop {
             self.snap.message = Some(match self.snap.message.take() {
                 Some(m) => format!("{m}\n{line}"),
                 None => line,
+            });
+            self.publish();
+        }
+        // A spindle whose stop its device did not confirm: said last, whatever the end.
+        if let Some(w) = spindle_warning {
+            tracing::error!("{w}");
+            self.snap.message = Some(match self.snap.message.take() {
+                Some(m) => format!("{m}\n{w}"),
+                None => w,
             });
             self.publish();
         }
