@@ -248,3 +248,26 @@ fn unwinding_a_panic_stops_the_spindle_and_confirms_it() {
     let exit = peer.stop_server();
     assert_eq!(exit["run"], false, "{exit}");
 }
+
+/// The VFD trips (its error register shows the code, the output coasts): the run ends in a
+/// controlled stop naming the device and the code, and the stop is written and confirmed.
+#[test]
+fn a_vfd_trip_ends_in_a_controlled_stop_with_the_stop_confirmed() {
+    let mut peer = VfdPeer::start("trip", 2000.0);
+    let klar = running(&peer);
+    peer.vfd_control("fault 7");
+    let run = klar.wait();
+    let log = peer.log();
+    let trip = find(&log, 0, |e| e["ev"] == "fault").expect("the VFD tripped");
+    assert_stop_confirmed_after(&log, trip);
+    assert!(!run.status.success(), "{run:?}");
+    let device = format!("spindle VFD (Modbus unit 1 on {})", peer.port);
+    assert!(
+        run.stderr.contains(&device) && run.stderr.contains("fault code 7"),
+        "the stop names the device and the fault: {}",
+        run.stderr
+    );
+    assert!(!run.stderr.contains("may still turn"), "{}", run.stderr);
+    let exit = peer.stop_server();
+    assert_eq!(exit["run"], false, "{exit}");
+}
