@@ -7,9 +7,11 @@
 //! [`ModbusVfd::reset_fault`].
 //!
 //! Stopping: [`SpindleBackend::stop_confirmed`] writes the stop and reads the status back
-//! until the VFD no longer drives the spindle (Delta: not in the run state; generic: the
-//! running bit clear), retrying within a bounded time; an error says the stop could not be
-//! confirmed. When the backend is dropped (every exit of the program, also a panic
+//! until two reads in a row show that the VFD no longer drives the spindle (Delta: not in
+//! the run state; generic: the running bit clear), retrying within a bounded time; an error
+//! says the stop could not be confirmed. Two reads, because RTU answers carry no
+//! transaction number: after a timed-out request whose answer came late, the next read can
+//! be answered with that older status; the second read's answer is then the first one's. When the backend is dropped (every exit of the program, also a panic
 //! unwinding) the worker does the same unless a stop was already tried since the last
 //! speed command, and logs an error when it cannot confirm it.
 
@@ -270,13 +272,15 @@ impl VfdWorker {
         }
     }
 
-    /// Writes the stop (until acknowledged) and reads the status until the VFD no longer
-    /// drives the spindle, every poll period, within the stop budget.
+    /// Writes the stop (until acknowledged) and reads the status until two reads in a row
+    /// show that the VFD no longer drives the spindle, every poll period, within the stop
+    /// budget.
     async fn stop_confirmed(&mut self) -> Result<(), ModbusError> {
         self.stop_tried = true;
         let started = Instant::now();
         let deadline = started + self.stop_budget;
         let mut acknowledged = false;
+        let mut stopped_reads = 0;
         let mut last = String::from("no answer");
         loop {
             if !acknowledged {
@@ -289,7 +293,16 @@ impl VfdWorker {
                 match self.read_status().await {
                     Ok(Some(status)) => {
                         self.status = Some(status);
-                        if !status.running {
+                        stopped_reads = if status.running { 0 } else { stopped_reads + 1 };
+                        last = format!(
+                            "the stop was acknowledged but the VFD still reports running at \
+                             {:.0} rpm",
+                            status.rpm
+                        );
+                        if stopped_reads == 1 {
+                            last = "one status read showed the stop, no second one".into();
+                        }
+                        if stopped_reads >= 2 {
                             info!(
                                 unit = self.link.unit(),
                                 rpm = status.rpm,
@@ -298,14 +311,15 @@ impl VfdWorker {
                             self.publish();
                             return Ok(());
                         }
-                        last = format!(
-                            "the stop was acknowledged but the VFD still reports running at \
-                             {:.0} rpm",
-                            status.rpm
-                        );
                     }
-                    Ok(None) => last = "the status registers could not be decoded".into(),
-                    Err(e) => last = e.to_string(),
+                    Ok(None) => {
+                        stopped_reads = 0;
+                        last = "the status registers could not be decoded".into();
+                    }
+                    Err(e) => {
+                        stopped_reads = 0;
+                        last = e.to_string();
+                    }
                 }
             }
             if Instant::now() + self.poll >= deadline {
