@@ -282,3 +282,35 @@ fn a_vfd_trip_ends_in_a_controlled_stop_with_the_stop_confirmed() {
     let exit = peer.stop_server();
     assert_eq!(exit["run"], false, "{exit}");
 }
+
+/// A VFD that refuses every request from some moment on (exception 04 to all): the run ends
+/// in a controlled stop, the stop cannot be confirmed, and the last line says so loudly.
+#[test]
+fn a_vfd_that_keeps_refusing_ends_with_the_loud_warning() {
+    let mut peer = VfdPeer::start("refusing", 2000.0);
+    let klar = running(&peer);
+    peer.vfd_control("exception 4");
+    let run = klar.wait();
+    assert!(!run.status.success(), "{run:?}");
+    let device = format!("spindle VFD (Modbus unit 1 on {})", peer.port);
+    let last = run.last_error_line();
+    assert!(
+        last.starts_with("WARNING: ")
+            && last.contains(&device)
+            && last.contains("exception 0x04")
+            && last.contains("may still turn"),
+        "the last line warns loudly: {}",
+        run.stderr
+    );
+    // The stop was tried (and refused) after the refusals began.
+    let log = peer.log();
+    let first = find(&log, 0, |e| e["exc"].as_u64() == Some(4)).expect("refusals");
+    assert!(
+        find(&log, first + 1, |e| e["addr"].as_u64() == Some(0x2001)
+            && e["exc"].as_u64() == Some(4))
+        .is_some(),
+        "no stop attempt after the refusals began"
+    );
+    let exit = peer.stop_server();
+    assert_eq!(exit["run"], true, "{exit}");
+}
