@@ -292,7 +292,8 @@ pub const COUNTS_PER_MM: f64 = 1000.0;
 pub fn machine_toml(port: &Path, axes: &[PeerAxis], bus_extra: &str) -> String {
     let mut s = format!(
         r#"name = "peers"
-servo_period = 0.004
+servo_period = 0.008
+max_setpoint_lateness = 0.3
 tolerance = 0.01
 start_homed = true
 
