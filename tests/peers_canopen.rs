@@ -227,19 +227,42 @@ const LONG: &str = "0 BEGIN PGM LONG MM
 2 END PGM LONG MM
 ";
 
-/// Starts the program, waits until `node`'s drive moves, injects `command` into `target`'s
-/// drive and returns klar's output and the peers.
-fn fault_case(name: &str, target: u8, command: &str) -> (std::process::Output, CanPeers) {
-    let peers = CanPeers::start(name, &[1, 2, 3], &["--heartbeat", "50"]);
+/// The long move with the spindle turning.
+const LONG_SPINDLE: &str = "0 BEGIN PGM LONG MM
+1 TOOL CALL 1 Z S3000
+2 L X+30 Y+30 Z+10 F900 M3
+3 END PGM LONG MM
+";
+
+/// Starts the program (with a Delta VFD spindle turning when `spindle`), waits until X
+/// moves, injects `command` into `target`'s drive and returns klar's output and the peers.
+fn fault_case(
+    name: &str,
+    target: u8,
+    command: &str,
+    spindle: bool,
+) -> (std::process::Output, CanPeers) {
+    let mut peers = CanPeers::start(name, &[1, 2, 3], &["--heartbeat", "50"]);
     let machine = xyz(&peers, 0.0);
-    let program = peers.write("long.h", LONG);
+    let program = if spindle {
+        let table = peers.start_vfd();
+        let text = std::fs::read_to_string(&machine).expect("machine file") + &table;
+        std::fs::write(&machine, text).expect("machine file");
+        peers.write("long.h", LONG_SPINDLE)
+    } else {
+        peers.write("long.h", LONG)
+    };
     let klar = spawn_klar(&program, &machine);
     let moving = peers.wait_log(1, Duration::from_secs(20), |e| {
         e["ev"] == "rpdo"
             && e["state"] == "OPERATION ENABLED"
             && e["values"]["0x607A:00"].as_i64().unwrap_or(0) > 2000
     });
-    assert!(moving, "{name}: X never moved");
+    if !moving {
+        let out = finish_klar(klar, Duration::from_secs(1));
+        let said = out.map(|o| text(&o.stderr)).unwrap_or_default();
+        panic!("{name}: X never moved\n{said}");
+    }
     peers.control(target, command);
     let out = finish_klar(klar, RUN_TIMEOUT).expect("klar ended after the fault");
     (out, peers)
@@ -253,6 +276,24 @@ fn final_line(out: &std::process::Output) -> String {
         .find(|l| l.starts_with("stopped:"))
         .unwrap_or_default()
         .to_string()
+}
+
+/// The spindle was running (a run command to the VFD, 0x2000 bits 0-1 = 10) and was
+/// commanded to stop afterwards (bits 0-1 = 01).
+fn assert_spindle_stopped(peers: &CanPeers) {
+    let commands: Vec<i64> = peers
+        .vfd_log()
+        .iter()
+        .filter(|e| e["addr"].as_i64() == Some(0x2000))
+        .filter_map(|e| e["values"].get(0).and_then(Value::as_i64))
+        .collect();
+    let run = commands.iter().position(|c| c & 0x3 == 0x2);
+    assert!(run.is_some(), "the spindle never ran: {commands:?}");
+    let stopped = commands
+        .iter()
+        .skip(run.unwrap_or(0))
+        .any(|c| c & 0x3 == 0x1);
+    assert!(stopped, "the spindle was not stopped: {commands:?}");
 }
 
 /// The other drives were brought to rest under control: each left OPERATION ENABLED by a
@@ -275,7 +316,7 @@ fn assert_others_stopped(peers: &CanPeers, faulted: u8) {
 #[test]
 fn a_drive_fault_names_its_node_axis_and_code() {
     let _one = serial();
-    let (out, peers) = fault_case("fault", 2, "fault 0x2310");
+    let (out, peers) = fault_case("fault", 2, "fault 0x2310", true);
     assert!(!out.status.success());
     let last = final_line(&out);
     assert!(
@@ -287,12 +328,13 @@ fn a_drive_fault_names_its_node_axis_and_code() {
     );
     assert_eq!(emcys(&peers.log(2)), vec!["0x2310".to_string()]);
     assert_others_stopped(&peers, 2);
+    assert_spindle_stopped(&peers);
 }
 
 #[test]
 fn a_silent_heartbeat_names_its_node_and_axis() {
     let _one = serial();
-    let (out, peers) = fault_case("mute", 1, "mute");
+    let (out, peers) = fault_case("mute", 1, "mute", false);
     assert!(!out.status.success());
     let last = final_line(&out);
     assert!(
@@ -307,7 +349,7 @@ fn a_silent_heartbeat_names_its_node_and_axis() {
 #[test]
 fn a_node_going_offline_names_its_node_and_axis() {
     let _one = serial();
-    let (out, peers) = fault_case("offline", 3, "offline");
+    let (out, peers) = fault_case("offline", 3, "offline", true);
     assert!(!out.status.success());
     let last = final_line(&out);
     assert!(
@@ -316,12 +358,13 @@ fn a_node_going_offline_names_its_node_and_axis() {
         text(&out.stderr)
     );
     assert_others_stopped(&peers, 3);
+    assert_spindle_stopped(&peers);
 }
 
 #[test]
 fn a_power_cycled_drive_names_its_node_and_axis() {
     let _one = serial();
-    let (out, peers) = fault_case("powercycle", 2, "power-cycle");
+    let (out, peers) = fault_case("powercycle", 2, "power-cycle", false);
     assert!(!out.status.success());
     let last = final_line(&out);
     assert!(
