@@ -142,6 +142,7 @@ fn a_program_completes_with_the_drives_tracking_and_ends_in_position() {
         assert!(e <= 100, "node {node}: tracking error {e} counts > 0.1 mm");
         // Switched off only at the end point, within the in-position window.
         let at = disabled_at(&log).expect("the drive was disabled");
+        eprintln!("node {node}: tracking error {e} counts, disabled at {at} (end point {end})");
         assert!(
             ((at - end) as f64).abs() <= WINDOW_COUNTS,
             "node {node}: disabled at {at}, end point {end}"
