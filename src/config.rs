@@ -58,6 +58,18 @@ pub struct CanopenAxisConfig {
     /// On a simulated bus: the servo plant behind the drive (defaults when absent).
     #[serde(default)]
     pub plant: Option<SimAxisParams>,
+    /// At the program's end the drive is switched off only once its measured position is
+    /// within this distance of the end point, mm or degrees.
+    #[serde(default = "default_in_position")]
+    pub in_position: f64,
+    /// How long the axis may take to come within `in_position` at the program's end, s;
+    /// beyond it the run ends with an error naming the axis and its distance.
+    #[serde(default = "default_end_timeout")]
+    pub settle_timeout: f64,
+}
+
+fn default_end_timeout() -> f64 {
+    2.0
 }
 
 /// An axis on a Modbus RTU positioning drive.
@@ -623,6 +635,10 @@ impl MachineConfig {
             match &a.backend {
                 BackendConfig::Canopen(c) if !self.canopen.contains_key(&c.bus) => {
                     return Err(format!("axis {l}: no [canopen.{}] bus", c.bus));
+                }
+                BackendConfig::Canopen(c) => {
+                    positive(&format!("axis {l}: in_position"), c.in_position)?;
+                    positive(&format!("axis {l}: settle_timeout"), c.settle_timeout)?;
                 }
                 BackendConfig::Modbus(m) => {
                     positive(&format!("axis {l}: in_position"), m.in_position)?;

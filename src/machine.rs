@@ -25,6 +25,9 @@ use std::collections::BTreeMap;
 struct BackendSlot {
     backend: Box<dyn AxisBackend>,
     axes: Vec<usize>,
+    /// The axes stand where the devices say, not at the machine file's `start` (drives
+    /// with their own position measurement: CANopen).
+    measured: bool,
 }
 
 /// Why the machine's I/O could not be set up.
@@ -165,6 +168,7 @@ fn sim_spindle_params(max_rpm: f64, sim: &SimSpindleConfig) -> SpindleParams {
 #[derive(Default)]
 struct CanGroup {
     axes: Vec<usize>,
+    letters: Vec<klar_interp::AxisLetter>,
     drives: Vec<DriveConfig>,
     plants: Vec<(SimAxisParams, f64)>,
     spindle: Option<klar_drivers::cia402::SpindleConfig>,
@@ -177,6 +181,30 @@ fn open_err(what: impl Into<String>, e: &dyn std::fmt::Display) -> MachineError 
     }
 }
 
+/// `message` with the axis of every configured node it names added at its end (`node 3 is
+/// axis Z`), so that a start-up error says which axis is concerned.
+fn name_axes(message: &str, letters: &[(u8, String)]) -> String {
+    let named: Vec<String> = letters
+        .iter()
+        .filter(|(node, _)| {
+            let n = node.to_string();
+            let bytes = message.as_bytes();
+            message.match_indices(&n).any(|(at, _)| {
+                let before = message[..at].trim_end_matches(['[', ' ', ',']);
+                let after = bytes.get(at + n.len()).copied();
+                (before.ends_with("node") || before.ends_with("node(s)"))
+                    && !after.is_some_and(|b| b.is_ascii_digit())
+            })
+        })
+        .map(|(node, what)| format!("node {node} is {what}"))
+        .collect();
+    if named.is_empty() {
+        message.to_string()
+    } else {
+        format!("{message} ({})", named.join(", "))
+    }
+}
+
 /// Opens a CANopen bus with its drives; returns the backend and what must stay alive.
 fn open_canopen(
     name: &str,
@@ -185,6 +213,15 @@ fn open_canopen(
     period: f64,
 ) -> Result<(Cia402Backend, Vec<Box<dyn Any>>), MachineError> {
     let what = format!("CANopen bus {name}");
+    let mut letters: Vec<(u8, String)> = group
+        .drives
+        .iter()
+        .zip(&group.letters)
+        .map(|(d, l)| (d.node, format!("axis {l}")))
+        .collect();
+    if let Some(s) = &group.spindle {
+        letters.push((s.node, "the spindle".into()));
+    }
     let mut config = network.clone();
     config.drives = group.drives;
     config.spindle = group.spindle;
@@ -235,7 +272,7 @@ fn open_canopen(
         }
         _ => Cia402Backend::open(&config, period),
     }
-    .map_err(|e| open_err(what, &e))?;
+    .map_err(|e| open_err(what, &name_axes(&e.to_string(), &letters)))?;
     Ok((backend, companions))
 }
 
@@ -262,6 +299,7 @@ impl MachineIo {
                 BackendConfig::Canopen(c) => {
                     let g = can.entry(c.bus.clone()).or_default();
                     g.axes.push(i);
+                    g.letters.push(l);
                     g.drives.push(c.drive.clone());
                     let mut plant = c.plant.clone().unwrap_or_default();
                     plant.start_homed = plant.start_homed || config.start_homed;
@@ -289,6 +327,7 @@ impl MachineIo {
                     slots.push(BackendSlot {
                         backend: Box::new(backend),
                         axes: vec![i],
+                        measured: false,
                     });
                 }
                 BackendConfig::Stepdir(s) => {
@@ -320,6 +359,7 @@ impl MachineIo {
                     slots.push(BackendSlot {
                         backend: Box::new(axis),
                         axes: vec![i],
+                        measured: false,
                     });
                 }
             }
@@ -336,6 +376,7 @@ impl MachineIo {
             slots.push(BackendSlot {
                 backend: Box::new(shared.backend()),
                 axes: sim_index,
+                measured: false,
             });
             sim = Some(shared);
         }
@@ -358,6 +399,7 @@ impl MachineIo {
             slots.push(BackendSlot {
                 backend: Box::new(backend),
                 axes,
+                measured: true,
             });
         }
         let spindle = match &config.spindle {
@@ -423,7 +465,7 @@ impl MachineIo {
         for (f, a) in feedback.iter_mut().zip(&config.axes) {
             f.position = a.start;
         }
-        Ok(Self {
+        let mut io = Self {
             slots,
             setpoints: config
                 .axes
@@ -439,6 +481,50 @@ impl MachineIo {
             spindle,
             sim,
             _companions: companions,
+        };
+        let letters: Vec<_> = config.axes.iter().map(|a| a.letter).collect();
+        io.read_positions(&letters)
+            .map_err(|e| open_err("reading the drives' positions", &e))?;
+        Ok(io)
+    }
+
+    /// Reads where the axes of drives with their own position measurement stand (one cycle
+    /// of those backends with the drives disabled) and makes it their feedback and their
+    /// commanded position: a run starts there, not at the machine file's `start`.
+    fn read_positions(&mut self, letters: &[klar_interp::AxisLetter]) -> Result<(), BackendError> {
+        for slot in self.slots.iter_mut().filter(|s| s.measured) {
+            let setpoints: Vec<Setpoint> = slot.axes.iter().map(|&i| self.setpoints[i]).collect();
+            let mut feedback: Vec<AxisFeedback> = slot
+                .axes
+                .iter()
+                .map(|&i| self.feedback[i].clone())
+                .collect();
+            slot.backend.cycle(0.0, &setpoints, &mut feedback)?;
+            for (k, &i) in slot.axes.iter().enumerate() {
+                let f = feedback[k].clone();
+                if let Some(fault) = &f.fault {
+                    let origin = slot
+                        .backend
+                        .fault_origin(k)
+                        .map(|o| format!(" ({})", o.detail))
+                        .unwrap_or_default();
+                    let letter = letters.get(i).map(|l| l.to_string()).unwrap_or_default();
+                    return Err(BackendError::InvalidState(format!(
+                        "axis {letter}: {fault}{origin}"
+                    )));
+                }
+                self.setpoints[i].position = f.position;
+                self.feedback[i] = f;
+            }
+        }
+        Ok(())
+    }
+
+    /// The origin of machine axis `axis`'s fault, when its backend knows it.
+    pub fn fault_origin(&self, axis: usize) -> Option<klar_motion::FaultOrigin> {
+        self.slots.iter().find_map(|s| {
+            let k = s.axes.iter().position(|&i| i == axis)?;
+            s.backend.fault_origin(k)
         })
     }
 
@@ -573,6 +659,9 @@ impl AxisBackend for Recording {
     }
     fn reset_fault(&mut self, axis: usize) -> Result<(), BackendError> {
         self.inner.reset_fault(axis)
+    }
+    fn fault_origin(&self, axis: usize) -> Option<klar_motion::FaultOrigin> {
+        self.inner.fault_origin(axis)
     }
     fn cycle(
         &mut self,

@@ -409,6 +409,19 @@ fn cmd_run(
     }
     if !quiet {
         say!("machine:      {}", config.name);
+        for a in &report.start {
+            let unit = if a.axis.is_rotary() { "deg" } else { "mm" };
+            let referenced = if a.referenced {
+                "referenced"
+            } else {
+                "not referenced"
+            };
+            say!(
+                "start {}:      {:.4} {unit} ({referenced})",
+                a.axis,
+                a.position
+            );
+        }
         say!("machine time: {:.3} s", report.machine_time);
         say!("blocks:       {}", report.blocks);
         say!("servo cycles: {}", report.cycles);

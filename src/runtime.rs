@@ -81,6 +81,21 @@ pub struct RunReport {
     /// Set when the spindle's stop at the end of the run could not be confirmed by its
     /// device: a warning that the spindle may still turn.
     pub spindle_warning: Option<String>,
+    /// Where each axis stood when the run started.
+    pub start: Vec<AxisStart>,
+}
+
+/// Where an axis stood when a run started: read from its drive when the drive measures its
+/// own position, else the machine file's `start`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct AxisStart {
+    /// The axis.
+    pub axis: AxisLetter,
+    /// Its position, mm or degrees.
+    pub position: f64,
+    /// True when its position is referenced (homed in this power cycle, an absolute
+    /// encoder, or a machine file that declares every axis homed with `start_homed`).
+    pub referenced: bool,
 }
 
 /// A run that ended early: the error plus what was measured until then.
@@ -126,6 +141,8 @@ pub struct Run<'a, 'w> {
     warned_no_spindle: bool,
     /// Per machine axis: (in-position window, settle timeout) for positioning-only axes.
     positioning: Vec<Option<(f64, f64)>>,
+    /// Per machine axis: (in-position window, timeout) waited for at the program's end.
+    end_windows: Vec<Option<(f64, f64)>>,
     /// Source of the last sample sent.
     last_loc: Option<SourceLoc>,
     /// Constant surface speed in m/min while G96 is active.
@@ -188,21 +205,17 @@ impl Run<'_, '_> {
         }
         self.io.cycle(t)?;
         self.record_cycle(t)?;
-        for (i, f) in self.io.feedback().iter().enumerate() {
-            if let Some(fault) = &f.fault {
-                return Err(RunError::Fault {
-                    axis: self.letters[i],
-                    fault: fault.clone(),
-                    line: self.line,
-                    block: self.last_loc.and_then(|l| l.block),
-                });
-            }
+        if let Some(i) = self.faulted_axis() {
+            return Err(self.axis_fault(i));
+        }
+        for i in 0..self.letters.len() {
             if let Some(limit) = self.fe_limits[i] {
                 let e = self.commanded[i] - self.actual[i];
                 if e.abs() > limit || e.is_nan() {
                     return Err(RunError::Fault {
                         axis: self.letters[i],
                         fault: AxisFault::FollowingError(e),
+                        origin: None,
                         line: self.line,
                         block: self.last_loc.and_then(|l| l.block),
                     });
@@ -225,6 +238,43 @@ impl Run<'_, '_> {
             );
         }
         self.check_operator()
+    }
+
+    /// The axis whose fault to report: one whose own device faulted (not one stopped only
+    /// because another device on its link did), else the first faulted axis.
+    fn faulted_axis(&self) -> Option<usize> {
+        let faulted: Vec<usize> = (self.io.feedback().iter().enumerate())
+            .filter(|(_, f)| f.fault.is_some())
+            .map(|(i, _)| i)
+            .collect();
+        faulted
+            .iter()
+            .copied()
+            .find(|&i| self.io.fault_origin(i).is_none_or(|o| o.primary))
+            .or(faulted.first().copied())
+    }
+
+    /// The error for the fault axis `i` reports, with the device and cause its backend
+    /// names when the fault's own words do not already say them.
+    pub(crate) fn axis_fault(&self, i: usize) -> RunError {
+        let fault = self
+            .io
+            .feedback()
+            .get(i)
+            .and_then(|f| f.fault.clone())
+            .unwrap_or(AxisFault::CommunicationLost);
+        let origin = self
+            .io
+            .fault_origin(i)
+            .map(|o| o.detail)
+            .filter(|d| !fault.to_string().contains(d.as_str()));
+        RunError::Fault {
+            axis: self.letters[i],
+            fault,
+            origin,
+            line: self.line,
+            block: self.last_loc.and_then(|l| l.block),
+        }
     }
 
     /// In realtime mode, sleeps until the cycle due at machine time `t`.
@@ -319,8 +369,38 @@ impl Run<'_, '_> {
                     return Err(RunError::Fault {
                         axis: self.letters[axis],
                         fault: AxisFault::FollowingError(self.commanded[axis] - self.actual[axis]),
+                        origin: None,
                         line: self.line,
                         block: self.last_loc.and_then(|l| l.block),
+                    });
+                }
+                self.hold_cycle()?;
+            }
+        }
+        Ok(())
+    }
+
+    /// At the program's end: holds the end point until every axis with an in-position
+    /// window (drives that follow on their own) stands within it, so the drives are not
+    /// switched off while still moving; an axis that does not get there in its time is an
+    /// error.
+    fn settle_end(&mut self) -> Result<(), RunError> {
+        let from = self.t;
+        for axis in 0..self.letters.len() {
+            let Some((window, timeout)) = self.end_windows[axis] else {
+                continue;
+            };
+            loop {
+                let distance = self.commanded[axis] - self.actual[axis];
+                if distance.abs() <= window {
+                    break;
+                }
+                if self.t - from > timeout {
+                    return Err(RunError::NotInPosition {
+                        axis: self.letters[axis],
+                        distance,
+                        window,
+                        timeout,
                     });
                 }
                 self.hold_cycle()?;
@@ -389,7 +469,7 @@ impl<'a, 'w> Run<'a, 'w> {
         options: RunOptions<'w>,
     ) -> Result<Self, Box<RunFailure>> {
         let letters = config.letters();
-        let report = RunReport {
+        let mut report = RunReport {
             max_following_error: letters.iter().map(|&l| (l, 0.0)).collect(),
             realtime: options.realtime || config.needs_wall_clock(),
             ..RunReport::default()
@@ -400,18 +480,49 @@ impl<'a, 'w> Run<'a, 'w> {
                 report: report.clone(),
             })
         };
+        if let Err(diags) = klar_interp::syntax_check(path) {
+            return Err(fail(RunError::Syntax(diags), &report));
+        }
+        let mut io = MachineIo::open(config).map_err(|e| fail(e.into(), &report))?;
+        // Drives that measure their own position stand where they stand, not at the machine
+        // file's `start`: the test run and the run start from there.
+        let at: Vec<f64> = io.feedback().iter().map(|f| f.position).collect();
         if config.check_before_run {
-            let checked = crate::testrun::test_run(path, config);
+            let mut measured = config.clone();
+            for (a, &x) in measured.axes.iter_mut().zip(&at) {
+                a.start = x;
+            }
+            let checked = crate::testrun::test_run(path, &measured);
             for w in &checked.warnings {
                 tracing::warn!("{w}");
             }
             if !checked.passed() {
                 return Err(fail(RunError::Syntax(checked.errors), &report));
             }
-        } else if let Err(diags) = klar_interp::syntax_check(path) {
-            return Err(fail(RunError::Syntax(diags), &report));
         }
-        let mut io = MachineIo::open(config).map_err(|e| fail(e.into(), &report))?;
+        for ((f, &l), a) in io.feedback().iter().zip(&letters).zip(&config.axes) {
+            let unit = if l.is_rotary() { "deg" } else { "mm" };
+            let referenced = if f.homed || config.start_homed {
+                "referenced"
+            } else {
+                "not referenced"
+            };
+            tracing::info!(
+                "axis {l} stands at {:.4} {unit} ({referenced}; machine file start {:.4})",
+                f.position,
+                a.start
+            );
+        }
+        report.start = io
+            .feedback()
+            .iter()
+            .zip(&letters)
+            .map(|(f, &l)| AxisStart {
+                axis: l,
+                position: f.position,
+                referenced: f.homed || config.start_homed,
+            })
+            .collect();
         if let Some(sim) = io.sim_axes() {
             sim.schedule(&config.faults).map_err(|e| {
                 let e = MachineError::Open {
@@ -421,7 +532,6 @@ impl<'a, 'w> Run<'a, 'w> {
                 fail(e.into(), &report)
             })?;
         }
-        let at: Vec<f64> = io.feedback().iter().map(|f| f.position).collect();
         let command = CommandPath::new(config, &at)
             .with_jumps(config)
             .map_err(|e| {
@@ -467,7 +577,6 @@ impl<'a, 'w> Run<'a, 'w> {
                 return Err(f);
             }
         }
-        let n = letters.len();
         Ok(Run {
             path,
             config,
@@ -486,10 +595,11 @@ impl<'a, 'w> Run<'a, 'w> {
             t: 0.0,
             shift: 0.0,
             line: 0,
-            commanded: config.axes.iter().map(|a| a.start).collect(),
-            actual: vec![0.0; n],
+            commanded: at.clone(),
+            actual: at.clone(),
             warned_no_spindle: false,
             positioning: positioning_axes(config),
+            end_windows: crate::testrun::end_windows(config),
             last_loc: None,
             surface_speed: None,
             stop_limits: config
@@ -546,7 +656,10 @@ impl<'a, 'w> Run<'a, 'w> {
             next = self.planner.next_step();
         }
         let result = match next {
-            None => self.settle_all().map(|()| false),
+            None => self
+                .settle_all()
+                .and_then(|()| self.settle_end())
+                .map(|()| false),
             Some(Step::Sample(sample)) => self.apply_sample(&sample).map(|()| true),
             // While stopping, events (spindle, stops) of blocks not reached are not executed.
             Some(Step::Event(_)) if self.stopping.is_some() => Ok(true),
@@ -615,6 +728,11 @@ impl<'a, 'w> Run<'a, 'w> {
             spindle_rpm,
             blocks: self.ops.blocks_executed(),
         }
+    }
+
+    /// Where each axis stood when the run started, and whether it is referenced.
+    pub fn start_positions(&self) -> &[AxisStart] {
+        &self.report.start
     }
 
     /// The machine axis letters, in trace order.

@@ -81,6 +81,21 @@ pub(crate) fn positioning_axes(config: &MachineConfig) -> Vec<Option<(f64, f64)>
         .collect()
 }
 
+/// Per machine axis: (in-position window, timeout) the program's end waits for before the
+/// drives are switched off: the drives that follow on their own (CANopen) and the
+/// positioning axes.
+pub(crate) fn end_windows(config: &MachineConfig) -> Vec<Option<(f64, f64)>> {
+    config
+        .axes
+        .iter()
+        .map(|a| match &a.backend {
+            BackendConfig::Canopen(c) => Some((c.in_position, c.settle_timeout)),
+            BackendConfig::Modbus(m) => Some((m.in_position, m.settle_timeout)),
+            _ => None,
+        })
+        .collect()
+}
+
 /// Runs the test run of the program at `path` on `config`.
 pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
     let start = start_pose(config);

@@ -127,6 +127,23 @@ fn emergencies_are_decoded() {
         "{text}"
     );
     assert!(text.contains("generic, current"), "{text}");
+    // The class of 0x23xx (CiA 301: current on the device's output side) follows the name.
+    assert_eq!(
+        text,
+        "node 5: EMCY 0x2310 continuous over-current (current, device output side; \
+         error register 0x03: generic, current)"
+    );
+    // A code known only by its class is named once, by the class.
+    let classed = Emergency {
+        node: 1,
+        code: 0x2399,
+        register: 0x03,
+        manufacturer: [0; 5],
+    };
+    assert_eq!(
+        classed.to_string(),
+        "node 1: EMCY 0x2399 current, device output side (error register 0x03: generic, current)"
+    );
     assert_eq!(e.encode(), [0x10, 0x23, 0x03, 1, 2, 3, 4, 5]);
     assert!(Emergency::decode(1, &[0; 7]).is_none());
 }

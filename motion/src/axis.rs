@@ -131,6 +131,22 @@ pub trait AxisBackend {
         setpoints: &[Setpoint],
         feedback: &mut [AxisFeedback],
     ) -> Result<(), BackendError>;
+
+    /// Where the fault `axis` reports comes from, when the backend knows more than the
+    /// [`AxisFault`] says (the device and the cause). `None`: nothing more to say.
+    fn fault_origin(&self, _axis: usize) -> Option<FaultOrigin> {
+        None
+    }
+}
+
+/// The origin of an axis's fault as the backend knows it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FaultOrigin {
+    /// True when the axis's own device faulted; false when the axis was only stopped
+    /// because another device on the same link faulted.
+    pub primary: bool,
+    /// The device and the cause in words, e.g. `node 1: heartbeat lost (silent for 0.5 s)`.
+    pub detail: String,
 }
 
 /// What a spindle reports back.

@@ -22,8 +22,8 @@ pub mod profile;
 pub mod tilt;
 
 pub use axis::{
-    AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError, Setpoint, SpindleBackend,
-    SpindleFeedback,
+    AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError, FaultOrigin, Setpoint,
+    SpindleBackend, SpindleFeedback,
 };
 pub use config::{AxisLimits, ConfigError, PlannerConfig};
 pub use error::MotionError;

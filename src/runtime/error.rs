@@ -22,16 +22,34 @@ pub enum RunError {
     Motion(#[from] MotionError),
     /// An axis faulted (or the control's following-error monitor tripped on it): the
     /// axes were brought to rest with a quick stop.
-    #[error("axis {axis}: {fault} (at {})", where_text(*line, *block))]
+    #[error("axis {axis}: {fault}{} (at {})", origin_text(.origin), where_text(*line, *block))]
     Fault {
         /// The axis.
         axis: AxisLetter,
         /// What it reported.
         fault: AxisFault,
+        /// The device and cause behind the fault when the backend names more than the fault
+        /// says (e.g. `node 1: heartbeat lost (silent for 0.512 s)`).
+        origin: Option<String>,
         /// Program line being executed.
         line: u32,
         /// Block number being executed, if the block has one.
         block: Option<u64>,
+    },
+    /// At the program's end an axis did not come within its in-position window of the end
+    /// point in time: the drives were switched off where they stood.
+    #[error(
+        "axis {axis}: not in position at the program end: {distance:.4} from the end point after {timeout} s (window {window})"
+    )]
+    NotInPosition {
+        /// The axis.
+        axis: AxisLetter,
+        /// Commanded minus measured position when the time ran out.
+        distance: f64,
+        /// The in-position window.
+        window: f64,
+        /// The time allowed, s.
+        timeout: f64,
     },
     /// The setpoints reached the axes too late (setpoint underrun): the run stopped on the
     /// path.
@@ -106,6 +124,14 @@ fn letters_list(letters: &[AxisLetter]) -> String {
         .map(ToString::to_string)
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+/// ` (origin)` when there is one.
+fn origin_text(origin: &Option<String>) -> String {
+    origin
+        .as_ref()
+        .map(|o| format!(" ({o})"))
+        .unwrap_or_default()
 }
 
 /// `block N (line L)` or `line L`.

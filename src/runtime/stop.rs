@@ -314,19 +314,8 @@ impl Run<'_, '_> {
         self.shift += period;
         self.io.cycle(self.t + period)?;
         self.record_cycle(self.t + period)?;
-        let still_faulted = self
-            .io
-            .feedback()
-            .iter()
-            .zip(&self.letters)
-            .find_map(|(f, &l)| f.fault.clone().map(|fault| (l, fault)));
-        if let Some((axis, fault)) = still_faulted {
-            return Err(RunError::Fault {
-                axis,
-                fault,
-                line: self.line,
-                block: self.last_loc.and_then(|l| l.block),
-            });
+        if let Some(i) = self.faulted_axis() {
+            return Err(self.axis_fault(i));
         }
         Ok(())
     }

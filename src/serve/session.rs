@@ -92,6 +92,9 @@ pub struct Snapshot {
     pub commanded: Vec<f64>,
     /// Measured position per axis.
     pub actual: Vec<f64>,
+    /// Per axis: its position is referenced (homed, an absolute encoder, or a machine file
+    /// with `start_homed`); taken from the drives when a run starts.
+    pub referenced: Vec<bool>,
     /// Following error per axis.
     pub following_error: Vec<f64>,
     /// Commanded velocity per axis over the last servo cycle, per second.
@@ -276,6 +279,11 @@ impl MachineLoop {
         };
         run.set_feed_override(self.feed_override);
         run.watch_operator_stop(self.stop.clone());
+        // Where the axes stand as their drives report it, before the first cycle.
+        let start = run.start_positions();
+        self.snap.referenced = start.iter().map(|a| a.referenced).collect();
+        self.snap.actual = start.iter().map(|a| a.position).collect();
+        self.snap.commanded.clone_from(&self.snap.actual);
         tracing::info!(program = %path.display(), "run started");
         let mut derivatives = Derivatives::new(run.letters().len());
         let mut first = true;
@@ -436,6 +444,7 @@ pub fn idle_snapshot(config: &MachineConfig) -> Snapshot {
         letters: config.axes.iter().map(|a| a.letter.to_string()).collect(),
         commanded: start.clone(),
         actual: start,
+        referenced: vec![config.start_homed; n],
         following_error: vec![0.0; n],
         velocity: vec![0.0; n],
         acceleration: vec![0.0; n],

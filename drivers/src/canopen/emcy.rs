@@ -46,18 +46,31 @@ impl Emergency {
     pub fn name(&self) -> &'static str {
         error_code_name(self.code)
     }
+
+    /// The message in words: node, code, its name, its class (when the name is more exact
+    /// than the class) and the error register, e.g. `node 2: EMCY 0x2310 continuous
+    /// over-current (current, device output side; error register 0x03: generic, current)`.
+    pub fn describe(&self) -> String {
+        self.to_string()
+    }
 }
 
 impl fmt::Display for Emergency {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "node {}: EMCY 0x{:04X} {} (error register 0x{:02X}",
+            "node {}: EMCY 0x{:04X} {}",
             self.node,
             self.code,
-            self.name(),
-            self.register
+            self.name()
         )?;
+        let class = class_name(self.code);
+        if class != self.name() {
+            write!(f, " ({class}; ")?;
+        } else {
+            write!(f, " (")?;
+        }
+        write!(f, "error register 0x{:02X}", self.register)?;
         let bits = register_bit_names(self.register);
         if !bits.is_empty() {
             write!(f, ": {}", bits.join(", "))?;
@@ -93,12 +106,15 @@ pub fn error_code_name(code: u16) -> &'static str {
         0x0000 => "error reset or no error",
         0x2310 => "continuous over-current",
         0x2320 => "short circuit or earth leakage",
+        0x3110 => "mains over-voltage",
+        0x3120 => "mains under-voltage",
         0x3210 => "DC link over-voltage",
         0x3220 => "DC link under-voltage",
         0x4310 => "drive over-temperature",
         0x5530 => "data storage error",
         0x7121 => "motor blocked",
         0x7305 => "incremental sensor 1 fault",
+        0x8100 => "communication error",
         0x8110 => "CAN overrun (objects lost)",
         0x8120 => "CAN in error passive mode",
         0x8130 => "life guard error or heartbeat error",

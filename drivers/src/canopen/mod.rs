@@ -186,16 +186,30 @@ pub enum CanOpenError {
         what: String,
     },
     /// Nodes that did not send their boot-up message in time.
-    #[error("no boot-up from node(s) {nodes:?} within {timeout_ms} ms")]
+    #[error("no boot-up from node(s) {nodes:?} within {timeout_ms} ms{}", unexpected_text(.unexpected))]
     BootTimeout {
         /// The silent nodes.
         nodes: Vec<u8>,
         /// The wait in milliseconds.
         timeout_ms: u64,
+        /// Nodes that did boot but are not configured (a drive set to another node ID?).
+        unexpected: Vec<u8>,
     },
     /// A node ID outside 1..=127.
     #[error("node ID {0} outside 1..=127")]
     BadNodeId(u8),
+}
+
+/// ` (boot-up from node(s) [..], not configured: ...)` when other nodes answered.
+fn unexpected_text(unexpected: &[u8]) -> String {
+    if unexpected.is_empty() {
+        String::new()
+    } else {
+        format!(
+            "; boot-up from node(s) {unexpected:?}, which are not configured: is a drive set \
+             to another node ID?"
+        )
+    }
 }
 
 #[derive(Debug, Clone, Default)]
@@ -389,9 +403,16 @@ impl Master {
             }
             let now = Instant::now();
             if now >= deadline {
+                let unexpected = self
+                    .nodes
+                    .iter()
+                    .filter(|(n, s)| s.state.is_some() && !nodes.contains(n))
+                    .map(|(&n, _)| n)
+                    .collect();
                 return Err(CanOpenError::BootTimeout {
                     nodes: missing,
                     timeout_ms: timeout.as_millis() as u64,
+                    unexpected,
                 });
             }
             if let Some(ev) = self.bus_recv(deadline - now)? {

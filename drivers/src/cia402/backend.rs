@@ -25,7 +25,9 @@
 
 use std::sync::{Arc, Mutex, MutexGuard};
 
-use klar_motion::{AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError, Setpoint};
+use klar_motion::{
+    AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError, FaultOrigin, Setpoint,
+};
 
 use super::config::CanOpenConfig;
 use super::network::{Cia402Error, DriveKind, Homing, Network};
@@ -223,6 +225,7 @@ impl Network {
         if let Some(d) = self.drives.get_mut(index) {
             d.fault = None;
             d.secondary = false;
+            d.cause = None;
             d.last_emcy = None;
             d.controlword = CW_DISABLE_VOLTAGE;
         }
@@ -240,6 +243,7 @@ impl Network {
             if axes_clear && d.secondary {
                 d.fault = None;
                 d.secondary = false;
+                d.cause = None;
             }
         }
         if self.drives.iter().all(|d| d.fault.is_none()) {
@@ -447,5 +451,15 @@ impl AxisBackend for Cia402Backend {
             };
         }
         Ok(())
+    }
+
+    fn fault_origin(&self, axis: usize) -> Option<FaultOrigin> {
+        let net = lock(&self.net);
+        let d = net.drives.get(axis).filter(|_| axis < net.axes)?;
+        d.fault.as_ref()?;
+        Some(FaultOrigin {
+            primary: !d.secondary,
+            detail: d.cause.clone()?,
+        })
     }
 }

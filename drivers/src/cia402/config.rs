@@ -37,6 +37,10 @@ pub struct CanOpenConfig {
     /// Time allowed for enable, disable and fault reset sequences, ms.
     #[serde(default = "default_state_timeout_ms")]
     pub state_timeout_ms: u64,
+    /// How long start-up waits, sending SYNC every servo period, for the first transmit PDO
+    /// of every drive, ms (a drive may take several SYNCs to answer after NMT start).
+    #[serde(default = "default_tpdo_timeout_ms")]
+    pub tpdo_timeout_ms: u64,
 }
 
 /// How the CAN bus is reached.
@@ -131,6 +135,10 @@ pub struct DriveConfig {
     /// Transmit PDO number used for statusword, actual position and mode display (1..=4).
     #[serde(default = "default_pdo_number")]
     pub tpdo: u16,
+    /// True when the drive's position is referenced from power-on (an absolute encoder
+    /// set up on the drive): the axis counts as homed without a homing run.
+    #[serde(default)]
+    pub absolute_encoder: bool,
 }
 
 /// How an axis drive follows the setpoints.
@@ -310,6 +318,9 @@ fn default_max_missed() -> u32 {
 }
 fn default_state_timeout_ms() -> u64 {
     1000
+}
+fn default_tpdo_timeout_ms() -> u64 {
+    500
 }
 fn default_serial_baud() -> u32 {
     115_200

@@ -67,6 +67,14 @@ pub enum Cia402Error {
     /// The bus adapter failed.
     #[error(transparent)]
     Bus(#[from] CanError),
+    /// The bus adapter on a serial port could not be opened or did not answer.
+    #[error("CAN adapter on {port}: {error}")]
+    Adapter {
+        /// The serial port.
+        port: String,
+        /// What failed.
+        error: CanError,
+    },
 }
 
 /// The cyclic traffic of `drives` drives (axes and spindle) with klar's PDO layout: SYNC
@@ -146,6 +154,8 @@ pub(crate) struct Drive {
     pub(crate) fault: Option<AxisFault>,
     /// True when `fault` only reports that another drive's fault stopped this one.
     pub(crate) secondary: bool,
+    /// The cause of `fault` in words, naming the node.
+    pub(crate) cause: Option<String>,
     pub(crate) last_emcy: Option<Emergency>,
     /// CSV axis: gain of the position loop klar closes, 1/s.
     pub(crate) position_gain: f64,
@@ -207,6 +217,11 @@ impl Network {
                 if d.fault.is_none() || d.secondary || index.is_some() {
                     d.fault = Some(fault.clone());
                     d.secondary = false;
+                    d.cause = Some(if index.is_some() {
+                        cause.clone()
+                    } else {
+                        format!("node {}: {cause}", d.node)
+                    });
                 }
             } else if d.fault.is_none() {
                 d.fault = Some(AxisFault::Drive {
@@ -214,6 +229,7 @@ impl Network {
                     text: format!("stopped: {cause}"),
                 });
                 d.secondary = true;
+                d.cause = Some(format!("node {}: stopped: {cause}", d.node));
             }
             d.homing = Homing::Idle;
             if d.kind == DriveKind::Spindle {
@@ -242,9 +258,9 @@ impl Network {
                     }
                     let fault = AxisFault::Drive {
                         code: u32::from(e.code),
-                        text: e.to_string(),
+                        text: e.describe(),
                     };
-                    let cause = e.to_string();
+                    let cause = e.describe();
                     if let Some(d) = self.drives.get_mut(i) {
                         d.last_emcy = Some(e);
                     }
@@ -381,7 +397,7 @@ impl Network {
             let mut raised: Option<(AxisFault, String)> = None;
             if power.is_fault() && d.fault.is_none() {
                 let (code, text) = match &d.last_emcy {
-                    Some(e) => (u32::from(e.code), e.to_string()),
+                    Some(e) => (u32::from(e.code), e.describe()),
                     None => (
                         0,
                         format!("node {node}: drive fault (no emergency message)"),

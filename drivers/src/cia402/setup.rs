@@ -32,7 +32,14 @@ pub(crate) fn open_bus(config: &CanOpenConfig) -> Result<Box<dyn CanBus>, Cia402
             } => {
                 let mut options = crate::can::slcan::SlcanOptions::host(*bitrate);
                 options.serial_baud = *serial_baud;
-                Box::new(crate::can::slcan::SlcanBus::open(port, options)?)
+                Box::new(
+                    crate::can::slcan::SlcanBus::open(port, options).map_err(|error| {
+                        Cia402Error::Adapter {
+                            port: port.clone(),
+                            error,
+                        }
+                    })?,
+                )
             }
             BusConfig::Sim { .. } | BusConfig::SimSlcan { .. } => {
                 return Err(Cia402Error::Config(
@@ -137,15 +144,7 @@ impl Network {
             stop: None,
             servo_period,
         };
-        // A first exchange reads every drive's state and position.
-        backend.exchange();
-        backend.handle_events();
-        if let Some(d) = backend.drives.iter().find(|d| !d.seen) {
-            return Err(Cia402Error::Config(format!(
-                "node {}: no transmit PDO after the first SYNC",
-                d.node
-            )));
-        }
+        backend.first_exchange(Duration::from_millis(config.tpdo_timeout_ms))?;
         for d in backend.drives.iter_mut() {
             d.target = d.hold_target();
             d.commanded = match d.kind {
@@ -154,6 +153,50 @@ impl Network {
             };
         }
         Ok(backend)
+    }
+}
+
+impl Network {
+    /// Exchanges (SYNC every servo period) until every drive has sent a transmit PDO with
+    /// its state and position, for at most `timeout`. A drive may need a few SYNCs after NMT
+    /// start before its PDOs flow; missing ones during this wait are not counted as lost.
+    fn first_exchange(&mut self, timeout: Duration) -> Result<(), Cia402Error> {
+        let start = std::time::Instant::now();
+        let period = Duration::from_secs_f64(self.servo_period);
+        let mut syncs = 0u32;
+        loop {
+            let cycle = std::time::Instant::now();
+            let max_missed = std::mem::replace(&mut self.max_missed, u32::MAX);
+            self.exchange();
+            self.max_missed = max_missed;
+            syncs += 1;
+            self.handle_events();
+            if let Some(stop) = &self.stop {
+                return Err(Cia402Error::Config(format!("at start-up: {stop}")));
+            }
+            let silent: Vec<String> = self
+                .drives
+                .iter()
+                .filter(|d| !d.seen)
+                .map(|d| d.node.to_string())
+                .collect();
+            if silent.is_empty() {
+                for d in self.drives.iter_mut() {
+                    d.missed = 0;
+                }
+                return Ok(());
+            }
+            if start.elapsed() >= timeout {
+                return Err(Cia402Error::Config(format!(
+                    "node {}: no transmit PDO within {} ms ({syncs} SYNCs) after NMT start",
+                    silent.join(", node "),
+                    timeout.as_millis()
+                )));
+            }
+            if let Some(rest) = period.checked_sub(cycle.elapsed()) {
+                std::thread::sleep(rest);
+            }
+        }
     }
 }
 
@@ -183,6 +226,7 @@ fn new_drive(cfg: &DriveConfig) -> Result<Drive, Cia402Error> {
     )?;
     drive.position_gain = cfg.gain();
     drive.following_window = cfg.following_error_window.map(f64::abs);
+    drive.homed = cfg.absolute_encoder;
     Ok(drive)
 }
 
@@ -245,6 +289,7 @@ fn make_drive(
         has_homing,
         fault: None,
         secondary: false,
+        cause: None,
         last_emcy: None,
         position_gain: 0.0,
         following_window: None,
