@@ -20,7 +20,9 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+mod ranges;
 mod tables;
+pub use ranges::{MAX_PIVOT, MAX_SPINDLE_RPM, MAX_TRAVEL};
 pub use tables::ActivePreset;
 
 /// Linear or rotary.
@@ -658,6 +660,7 @@ impl MachineConfig {
                 ));
             }
         }
+        ranges::check(self)?;
         for f in &self.faults {
             if !(f.at.is_finite() && f.at >= 0.0) {
                 return Err(format!("fault {:?}: at must be seconds >= 0", f.kind));
