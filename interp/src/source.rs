@@ -523,7 +523,7 @@ mod tests {
         assert!(r.text().is_empty());
         // continuation lines count together
         let mut text = Vec::new();
-        for _ in 0..MAX_BLOCK_BYTES / 8 {
+        for _ in 0..MAX_BLOCK_BYTES / 4 {
             text.extend_from_slice(b"Q1=1 ~\n");
         }
         text.extend_from_slice(b"Q1=1\n");
