@@ -399,7 +399,7 @@ impl<'a, 'w> Run<'a, 'w> {
         };
         if config.check_before_run {
             let checked = crate::testrun::test_run(path, config);
-            for w in &checked.warnings {
+            for w in checked.warnings.iter().chain(&checked.gave_up) {
                 tracing::warn!("{w}");
             }
             if !checked.passed() {
