@@ -36,6 +36,8 @@ const DATA_LIMIT: u64 = 256 * 1024 * 1024;
 /// The child is forked (a `pre_exec` step; a spawned child sharing the test's memory until
 /// its exec would report the test's own peak), so its `ru_maxrss` is the larger of the test's
 /// resident set at the fork (a few MB: the tests hold no large buffers) and klar's own peak.
+// the child is reaped by `wait4` (for its rusage), which clippy cannot see
+#[allow(clippy::zombie_processes)]
 fn klar(args: &[&str]) -> Measured {
     use std::os::unix::process::CommandExt;
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_klar"));
@@ -82,6 +84,7 @@ fn klar(args: &[&str]) -> Measured {
         assert_eq!(r, 0, "wait4 failed");
         if start.elapsed() > DEADLINE {
             let _ = child.kill();
+            let _ = child.wait();
             panic!("klar {args:?} did not end within {DEADLINE:?}");
         }
         std::thread::sleep(Duration::from_millis(5));
