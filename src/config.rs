@@ -20,7 +20,9 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+mod ranges;
 mod tables;
+pub use ranges::{MAX_PIVOT, MAX_SPINDLE_RPM, MAX_TRAVEL};
 pub use tables::ActivePreset;
 
 /// Linear or rotary.
@@ -423,6 +425,9 @@ pub enum ConfigError {
     },
 }
 
+/// Largest machine file read, bytes (klar's limit: a machine file is a few kB).
+pub const MAX_MACHINE_FILE: u64 = 1024 * 1024;
+
 /// The built-in simulated 3-axis mill as TOML (also the reference example of the format).
 pub const BUILTIN_MILL: &str = include_str!("../machines/mill.toml");
 
@@ -436,9 +441,15 @@ impl MachineConfig {
     /// Reads and validates a machine file.
     pub fn load(path: &Path) -> Result<Self, ConfigError> {
         let shown = path.display().to_string();
-        let text = std::fs::read_to_string(path).map_err(|source| ConfigError::Io {
+        let bytes = klar_interp::read_bounded(path, MAX_MACHINE_FILE).map_err(|source| {
+            ConfigError::Io {
+                path: shown.clone(),
+                source,
+            }
+        })?;
+        let text = String::from_utf8(bytes).map_err(|_| ConfigError::Parse {
             path: shown.clone(),
-            source,
+            message: "not UTF-8 text (a machine file is TOML)".into(),
         })?;
         let mut config = Self::parse(&shown, &text)?;
         config.base_dir = path.parent().map(Path::to_path_buf);
@@ -494,6 +505,10 @@ impl MachineConfig {
 
     /// The built-in machine for a program: the lathe for lathe DIN programs, else the mill.
     pub fn builtin_for(program: &Path) -> Self {
+        if klar_interp::not_a_file(program).is_some() {
+            // refused when the program is opened; a FIFO must not be opened here
+            return Self::builtin_mill();
+        }
         let head = std::fs::File::open(program)
             .and_then(|f| {
                 use std::io::Read;
@@ -661,6 +676,7 @@ impl MachineConfig {
                 ));
             }
         }
+        ranges::check(self)?;
         for f in &self.faults {
             if !(f.at.is_finite() && f.at >= 0.0) {
                 return Err(format!("fault {:?}: at must be seconds >= 0", f.kind));

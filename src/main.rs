@@ -49,6 +49,14 @@ enum Command {
         /// PLANE assumes an A/C table, any tool is known): `klar run` may still refuse it.
         #[arg(long)]
         program_only: bool,
+        /// Give up after this much planned machine time, s: a program that has not ended by
+        /// then (an endless loop with motion) is reported as undecided (exit status 2).
+        #[arg(long, value_name = "SECONDS", default_value_t = klar::testrun::MAX_PLANNED_TIME, conflicts_with = "program_only")]
+        max_machine_time: f64,
+        /// Give up after this many executed blocks with an action (moves, machine
+        /// functions): reported as undecided (exit status 2).
+        #[arg(long, value_name = "N", default_value_t = klar::testrun::MAX_EXECUTED_BLOCKS, conflicts_with = "program_only")]
+        max_blocks: u64,
     },
     /// Run a program on the machine (the built-in simulated mill by default).
     Run {
@@ -112,6 +120,9 @@ enum Command {
         /// Print the tool-centre path after radius compensation (RL/RR, APPR/DEP resolved).
         #[arg(long)]
         compensated: bool,
+        /// Stop after this many ops (an endless loop), exit status 2; 0 lifts the limit.
+        #[arg(long, value_name = "N", default_value_t = klar::testrun::MAX_EXECUTED_BLOCKS)]
+        max_ops: u64,
     },
 }
 
@@ -130,7 +141,16 @@ fn main() -> ExitCode {
             program,
             machine,
             program_only,
-        } => cmd_check(&program, machine.as_deref(), program_only, quiet),
+            max_machine_time,
+            max_blocks,
+        } => {
+            let limits = klar::testrun::TestRunLimits {
+                machine_time: max_machine_time,
+                blocks: max_blocks,
+                ..Default::default()
+            };
+            cmd_check(&program, machine.as_deref(), program_only, &limits, quiet)
+        }
         Command::Run {
             program,
             machine,
@@ -149,7 +169,8 @@ fn main() -> ExitCode {
             program,
             machine,
             compensated,
-        } => cmd_ops(&program, machine.as_deref(), compensated),
+            max_ops,
+        } => cmd_ops(&program, machine.as_deref(), compensated, max_ops),
         Command::Serve {
             machine,
             programs,
@@ -198,13 +219,19 @@ fn print_diagnostics(diags: &[Diagnostic]) {
     render::print(diags);
 }
 
-fn cmd_check(program: &Path, machine: Option<&Path>, program_only: bool, quiet: bool) -> ExitCode {
+fn cmd_check(
+    program: &Path,
+    machine: Option<&Path>,
+    program_only: bool,
+    limits: &klar::testrun::TestRunLimits,
+    quiet: bool,
+) -> ExitCode {
     let config = match load_machine_for(program, machine) {
         Ok(c) => c,
         Err(code) => return code,
     };
     if !program_only {
-        return cmd_test_run(program, &config, quiet);
+        return cmd_test_run(program, &config, limits, quiet);
     }
     // the program checked on its own, on no machine
     let report = match klar::config::open_on(None, program, start_pose(&config)) {
@@ -235,7 +262,7 @@ fn cmd_check(program: &Path, machine: Option<&Path>, program_only: bool, quiet: 
     }
 }
 
-fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCode {
+fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool, max_ops: u64) -> ExitCode {
     let config = match load_machine_for(program, machine) {
         Ok(c) => c,
         Err(code) => return code,
@@ -273,6 +300,7 @@ fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCod
         eprintln!("{}: {e}", program.display());
         ExitCode::FAILURE
     };
+    let mut count = 0u64;
     for item in interp {
         let op = match item {
             Ok(op) => op,
@@ -281,6 +309,18 @@ fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCod
                 return ExitCode::FAILURE;
             }
         };
+        count += 1;
+        if max_ops != 0 && count > max_ops {
+            let _ = out.flush();
+            eprintln!(
+                "{}:{}:{}: undecided: the program did not end within {max_ops} ops; `klar ops` \
+                 stops here (an endless loop?); --max-ops 0 lifts the limit",
+                program.display(),
+                op.loc.line,
+                op.loc.col
+            );
+            return ExitCode::from(2);
+        }
         match comp.as_mut() {
             None => {
                 tilt.push(op, &mut turned);
@@ -319,8 +359,13 @@ fn cmd_ops(program: &Path, machine: Option<&Path>, compensated: bool) -> ExitCod
 }
 
 /// `klar check PROGRAM --machine FILE`: the test run.
-fn cmd_test_run(program: &Path, config: &MachineConfig, quiet: bool) -> ExitCode {
-    let report = klar::testrun::test_run(program, config);
+fn cmd_test_run(
+    program: &Path,
+    config: &MachineConfig,
+    limits: &klar::testrun::TestRunLimits,
+    quiet: bool,
+) -> ExitCode {
+    let report = klar::testrun::test_run_within(program, config, limits);
     print_diagnostics(&report.errors);
     for w in &report.warnings {
         eprintln!("{w} (warning)");
@@ -330,6 +375,11 @@ fn cmd_test_run(program: &Path, config: &MachineConfig, quiet: bool) -> ExitCode
     }
     if !report.passed() {
         return ExitCode::FAILURE;
+    }
+    if let Some(d) = &report.gave_up {
+        // neither passed nor refused: the operator decides whether to run it
+        eprintln!("{d}");
+        return ExitCode::from(2);
     }
     if quiet {
         return ExitCode::SUCCESS;

@@ -70,8 +70,23 @@ pub fn run_with_progress(
 /// Lines of the program file (for the percentage); 0 when it cannot be read.
 fn count_lines(program: &Path) -> u64 {
     use std::io::BufRead;
-    match std::fs::File::open(program) {
-        Ok(f) => std::io::BufReader::new(f).split(b'\n').count() as u64,
-        Err(_) => 0,
+    if klar_interp::not_a_file(program).is_some() {
+        return 0;
+    }
+    let Ok(f) = std::fs::File::open(program) else {
+        return 0;
+    };
+    // counted in the reader's buffer: a line of any length costs no memory
+    let mut r = std::io::BufReader::new(f);
+    let mut lines = 0u64;
+    loop {
+        let n = match r.fill_buf() {
+            Ok([]) | Err(_) => return lines,
+            Ok(buf) => {
+                lines += buf.iter().filter(|&&b| b == b'\n').count() as u64;
+                buf.len()
+            }
+        };
+        r.consume(n);
     }
 }

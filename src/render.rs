@@ -23,7 +23,7 @@ const KNOWN_WORDS: &[&str] = &[
 struct Snippet {
     message: String,
     #[source_code]
-    code: NamedSource<String>,
+    code: NamedSource<Excerpt>,
     #[label("{label}")]
     span: SourceSpan,
     label: String,
@@ -31,49 +31,208 @@ struct Snippet {
     help: Option<String>,
 }
 
+/// Longest line (bytes) kept of a program line shown around a diagnostic; the rest of the line
+/// is skipped unread into memory.
+const MAX_KEPT_LINE: usize = 16 * 1024;
+
+/// Characters of a program line a snippet shows (a window around the column, with `…` where
+/// the line goes on).
+const SHOWN_CHARS: usize = klar_interp::MAX_QUOTED_CHARS;
+
 /// Prints each diagnostic to standard error: its plain line, then (for the first few) the
 /// snippet.
 pub fn print(diags: &[Diagnostic]) {
     let colour = std::io::stderr().is_terminal();
-    let mut source: Option<(std::path::PathBuf, Option<String>)> = None;
     for (i, d) in diags.iter().enumerate() {
         eprintln!("{d}");
         if i >= MAX_SNIPPETS {
             continue;
         }
-        if source.as_ref().is_none_or(|(p, _)| *p != d.file) {
-            source = Some((d.file.clone(), read_text(&d.file)));
-        }
-        if let Some((_, Some(text))) = &source
-            && let Some(s) = snippet(d, text, colour)
+        if let Some(lines) = read_excerpt(&d.file, d.line)
+            && let Some(s) = draw(d, &lines, colour)
         {
             eprint!("{s}");
         }
     }
 }
 
-fn read_text(path: &std::path::Path) -> Option<String> {
-    let bytes = std::fs::read(path).ok()?;
-    Some(match String::from_utf8(bytes) {
-        Ok(s) => s,
-        // Older controls write latin-1: every byte is its own code point.
-        Err(e) => e.into_bytes().iter().map(|&b| b as char).collect(),
-    })
+/// Lines around a diagnostic: the first line's number and the lines (without line ends).
+struct Lines {
+    first: u32,
+    lines: Vec<(String, bool)>,
 }
 
-/// Draws `d` against the program text; None when its line is not in the text.
+/// The lines `line - 1 ..= line + 1` of a program file, each cut at [`MAX_KEPT_LINE`] bytes
+/// (marked true when cut); None when the file is not a regular file or cannot be read. Reads
+/// through a fixed buffer: the lines before are skipped whatever their length.
+fn read_excerpt(path: &std::path::Path, line: u32) -> Option<Lines> {
+    use std::io::BufRead;
+    if line == 0 || klar_interp::not_a_file(path).is_some() {
+        return None;
+    }
+    let mut r = std::io::BufReader::new(std::fs::File::open(path).ok()?);
+    let first = line.saturating_sub(1).max(1);
+    let last = line.saturating_add(1);
+    let mut out = Lines {
+        first,
+        lines: Vec::new(),
+    };
+    let mut n = 1u32;
+    let mut cur: Vec<u8> = Vec::new();
+    let mut cut = false;
+    loop {
+        let buf = r.fill_buf().ok()?;
+        if buf.is_empty() {
+            if n >= first && n <= last && !cur.is_empty() {
+                out.lines.push((decode(&cur, cut), cut));
+            }
+            break;
+        }
+        let (take, ends) = match buf.iter().position(|&b| b == b'\n') {
+            Some(k) => (k + 1, true),
+            None => (buf.len(), false),
+        };
+        if n >= first && n <= last {
+            let room = MAX_KEPT_LINE.saturating_sub(cur.len());
+            let part = buf.get(..take.min(room)).unwrap_or(&[]);
+            cur.extend_from_slice(part);
+            cut |= take > room;
+        }
+        r.consume(take);
+        if ends {
+            if n >= first && n <= last {
+                while matches!(cur.last(), Some(b'\n' | b'\r')) {
+                    cur.pop();
+                }
+                out.lines.push((decode(&cur, cut), cut));
+            }
+            cur.clear();
+            cut = false;
+            n = n.saturating_add(1);
+            if n > last {
+                break;
+            }
+        }
+    }
+    (out.lines.len() as u64 > u64::from(line - first)).then_some(out)
+}
+
+/// Text of a program line: UTF-8 when it is (a character cut at the end dropped), latin-1
+/// otherwise (older controls write latin-1: every byte is its own code point).
+fn decode(bytes: &[u8], cut: bool) -> String {
+    match std::str::from_utf8(bytes) {
+        Ok(s) => s.to_string(),
+        Err(e) if cut && e.error_len().is_none() => {
+            String::from_utf8_lossy(bytes.get(..e.valid_up_to()).unwrap_or(&[])).into_owned()
+        }
+        Err(_) => bytes.iter().map(|&b| b as char).collect(),
+    }
+}
+
+/// Program lines as miette reads them, numbered from their place in the file.
+#[derive(Debug)]
+struct Excerpt {
+    text: String,
+    /// 0-based line of the first line in the file.
+    first: usize,
+}
+
+impl miette::SourceCode for Excerpt {
+    fn read_span<'a>(
+        &'a self,
+        span: &SourceSpan,
+        before: usize,
+        after: usize,
+    ) -> Result<Box<dyn miette::SpanContents<'a> + 'a>, miette::MietteError> {
+        let c = self.text.as_str().read_span(span, before, after)?;
+        Ok(Box::new(miette::MietteSpanContents::new(
+            c.data(),
+            *c.span(),
+            c.line() + self.first,
+            c.column(),
+            c.line_count(),
+        )))
+    }
+}
+
+/// Draws `d` against the whole program text (tests); None when its line is not in the text.
+#[cfg(test)]
 pub fn snippet(d: &Diagnostic, text: &str, colour: bool) -> Option<String> {
-    let (span, word) = locate(text, d.line, d.col)?;
+    let line = usize::try_from(d.line.checked_sub(1)?).ok()?;
+    let first = line.saturating_sub(1);
+    let lines: Vec<(String, bool)> = text
+        .split_inclusive('\n')
+        .skip(first)
+        .take(3)
+        .map(|l| (l.trim_end_matches(['\n', '\r']).to_string(), false))
+        .collect();
+    if lines.len() <= line - first {
+        return None;
+    }
+    draw(
+        d,
+        &Lines {
+            first: u32::try_from(first + 1).ok()?,
+            lines,
+        },
+        colour,
+    )
+}
+
+/// One line as shown: a window of [`SHOWN_CHARS`] characters from `from`, `…` where it goes
+/// on; returns the text and the character offset of `from` in it.
+fn window(line: &str, from: usize, cut: bool) -> (String, usize) {
+    let mut out = String::new();
+    let mut shift = 0;
+    if from > 0 {
+        out.push('…');
+        shift = 1;
+    }
+    let mut chars = line.chars().skip(from);
+    out.extend(chars.by_ref().take(SHOWN_CHARS));
+    if chars.next().is_some() || cut {
+        out.push('…');
+    }
+    (out, shift)
+}
+
+/// Draws `d` against the lines around it, each shown within [`SHOWN_CHARS`] characters.
+fn draw(d: &Diagnostic, lines: &Lines, colour: bool) -> Option<String> {
+    let at = usize::try_from(d.line.checked_sub(lines.first)?).ok()?;
+    let col0 = usize::try_from(d.col.max(1) - 1).ok()?;
+    let mut text = String::new();
+    let mut col = 1u32;
+    for (k, (l, cut)) in lines.lines.iter().enumerate() {
+        let from = if k == at {
+            col0.saturating_sub(SHOWN_CHARS / 2).min(l.chars().count())
+        } else {
+            0
+        };
+        let (shown, shift) = window(l, from, *cut);
+        if k == at {
+            col = u32::try_from(col0 - from + shift + 1).ok()?;
+        }
+        text.push_str(&shown);
+        text.push('\n');
+    }
+    let (span, word) = locate(&text, u32::try_from(at + 1).ok()?, col)?;
+    let word = word.to_string();
     let report = Snippet {
         message: d.message.clone(),
-        code: NamedSource::new(d.file.display().to_string(), text.to_string()),
+        code: NamedSource::new(
+            d.file.display().to_string(),
+            Excerpt {
+                text,
+                first: usize::try_from(lines.first).ok()?.saturating_sub(1),
+            },
+        ),
         span,
         label: if word.is_empty() {
             "here".into()
         } else {
             format!("`{word}`")
         },
-        help: suggestion(&d.message, word),
+        help: suggestion(&d.message, &word),
     };
     let theme = if colour {
         GraphicalTheme::unicode()

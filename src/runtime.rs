@@ -493,7 +493,7 @@ impl<'a, 'w> Run<'a, 'w> {
                 a.start = x;
             }
             let checked = crate::testrun::test_run(path, &measured);
-            for w in &checked.warnings {
+            for w in checked.warnings.iter().chain(&checked.gave_up) {
                 tracing::warn!("{w}");
             }
             if !checked.passed() {

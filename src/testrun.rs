@@ -32,9 +32,42 @@ use std::path::Path;
 /// Slack on soft-limit comparisons, mm or degrees.
 const TRAVEL_SLACK: f64 = 1e-9;
 
-/// Longest planned machine time the test run simulates, s: beyond it the planner pass stops
-/// (the other checks go on) and says so.
+/// Longest planned machine time the test run simulates, s: a program that has not ended by
+/// then (an endless loop with motion) is reported as undecided at the block reached.
 pub const MAX_PLANNED_TIME: f64 = 24.0 * 3600.0;
+
+/// Most servo cycles the test run plans (the bound on its computing time when the servo
+/// period is short: at 1 ms, [`MAX_PLANNED_TIME`] comes first).
+pub const MAX_SERVO_CYCLES: u64 = 100_000_000;
+
+/// Most executed blocks with an action (moves, machine functions: the ops the interpreter
+/// hands out) the test run follows. Blocks without one are bounded by the interpreter's
+/// [`klar_interp::RUN_IDLE_JUMP_LIMIT`] between two actions.
+pub const MAX_EXECUTED_BLOCKS: u64 = 10_000_000;
+
+/// What the interpreter's check says when it stops at [`klar_interp::CHECK_JUMP_LIMIT`].
+const LOOP_MARK: &str = "jumps: the check stops";
+
+/// Where the test run gives up on a program that does not end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TestRunLimits {
+    /// Planned machine time, s.
+    pub machine_time: f64,
+    /// Planned servo cycles.
+    pub servo_cycles: u64,
+    /// Executed blocks with an action.
+    pub blocks: u64,
+}
+
+impl Default for TestRunLimits {
+    fn default() -> Self {
+        TestRunLimits {
+            machine_time: MAX_PLANNED_TIME,
+            servo_cycles: MAX_SERVO_CYCLES,
+            blocks: MAX_EXECUTED_BLOCKS,
+        }
+    }
+}
 
 /// What the test run found.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -51,6 +84,9 @@ pub struct TestRunReport {
     pub planned_time: f64,
     /// Lowest and highest position per machine axis over the checked moves.
     pub envelope: Vec<(AxisLetter, f64, f64)>,
+    /// The program did not end within the [`TestRunLimits`]: an endless loop, or a program
+    /// longer than them. Neither passed nor refused: the block reached and why.
+    pub gave_up: Option<Diagnostic>,
 }
 
 impl TestRunReport {
@@ -96,8 +132,17 @@ pub(crate) fn end_windows(config: &MachineConfig) -> Vec<Option<(f64, f64)>> {
         .collect()
 }
 
-/// Runs the test run of the program at `path` on `config`.
+/// Runs the test run of the program at `path` on `config`, within the default limits.
 pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
+    test_run_within(path, config, &TestRunLimits::default())
+}
+
+/// Runs the test run of the program at `path` on `config`; it gives up at `limits`.
+pub fn test_run_within(
+    path: &Path,
+    config: &MachineConfig,
+    limits: &TestRunLimits,
+) -> TestRunReport {
     let start = start_pose(config);
     let checked = match config.open_program(path, start) {
         Ok(it) => it.check_report(),
@@ -108,6 +153,12 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
     };
     // A file the program needs is not there: the run would stop at it.
     let mut errors = checked.errors;
+    // Many jumps are no error of their own: whether the program ends is the machine pass's to
+    // find out, within the limits (the jump that went on looping is named if it gives up).
+    let looping = errors
+        .iter()
+        .position(|d| d.message.contains(LOOP_MARK))
+        .map(|i| errors.remove(i));
     errors.extend(checked.missing.iter().cloned());
     errors.sort_by_key(|d| d.line);
     // Where the program depends on what happens at the machine (a missing called program,
@@ -140,10 +191,21 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
         return report;
     };
     interp.set_dry_run(true);
-    let mut machine = MachineChecks::new(path, config, start);
+    let mut machine = MachineChecks::new(path, config, start, *limits);
     let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
+    let mut ops = 0u64;
     // The same stream a run plans from: the compensated tool-centre path, feeds resolved.
     for item in OpStream::new(interp, start, max_rpm, path) {
+        if machine.gave_up.is_some() {
+            break;
+        }
+        ops += 1;
+        if ops > limits.blocks
+            && let Ok(op) = &item
+        {
+            machine.give_up(op.loc, format!("{} executed blocks", limits.blocks));
+            break;
+        }
         let item = match item {
             Ok(op) => Ok(op),
             Err(RunError::Program(d)) => Err(d),
@@ -180,6 +242,16 @@ pub fn test_run(path: &Path, config: &MachineConfig) -> TestRunReport {
         }
     }
     machine.finish(&mut report);
+    report.gave_up = machine.gave_up.take().map(|mut d| {
+        if let Some(j) = &looping {
+            d.message.push_str(&format!(
+                "; the jump at line {} ran more than {} times",
+                j.line,
+                klar_interp::CHECK_JUMP_LIMIT
+            ));
+        }
+        d
+    });
     if config.tools.is_none() && config.tool_table.is_none() && machine.tool_calls > 0 {
         report
             .undecided
@@ -203,10 +275,15 @@ struct MachineChecks<'a> {
     tool_calls: u64,
     /// The active tool and its radius (mm), until a zero-radius warning was given for it.
     tool: Option<(u32, f64)>,
+    limits: TestRunLimits,
+    /// Servo cycles planned so far.
+    cycles: u64,
+    /// The block where the test run gave up (see [`TestRunReport::gave_up`]).
+    gave_up: Option<Diagnostic>,
 }
 
 impl<'a> MachineChecks<'a> {
-    fn new(path: &'a Path, config: &'a MachineConfig, start: Pose) -> Self {
+    fn new(path: &'a Path, config: &'a MachineConfig, start: Pose, limits: TestRunLimits) -> Self {
         let planner = config.planner(start).ok();
         let at: Vec<f64> = config.axes.iter().map(|a| a.start).collect();
         Self {
@@ -220,7 +297,43 @@ impl<'a> MachineChecks<'a> {
             planner,
             tool_calls: 0,
             tool: None,
+            limits,
+            cycles: 0,
+            gave_up: None,
         }
+    }
+
+    /// Gives up at the block `loc`: the program has not ended within `what`.
+    fn give_up(&mut self, loc: SourceLoc, what: String) {
+        self.planner = None;
+        self.gave_up = Some(block_diagnostic(
+            self.path,
+            loc,
+            format!(
+                "undecided: the program did not end within {what}; the test run stops at this \
+                 block (an endless loop?); `klar run` runs it for as long as the operator lets it"
+            ),
+        ));
+    }
+
+    /// Counts a planned step; true when a limit is reached (and the test run has given up).
+    fn over_limit(&mut self, step: &Step, report: &TestRunReport) -> bool {
+        if matches!(step, Step::Sample(_)) {
+            self.cycles += 1;
+        }
+        let what = if report.planned_time > self.limits.machine_time {
+            format!("{} s of machine time", self.limits.machine_time)
+        } else if self.cycles > self.limits.servo_cycles {
+            format!("{} servo cycles", self.limits.servo_cycles)
+        } else {
+            return false;
+        };
+        let loc = match step {
+            Step::Sample(s) => s.loc,
+            Step::Event(op) => op.loc,
+        };
+        self.give_up(loc, what);
+        true
     }
 
     fn error(&self, report: &mut TestRunReport, loc: SourceLoc, message: String) {
@@ -455,16 +568,18 @@ impl<'a> MachineChecks<'a> {
                 self.planner = None;
                 return;
             }
-            while !planner.needs_input() {
+            loop {
+                let Some(planner) = &mut self.planner else {
+                    return;
+                };
+                if planner.needs_input() {
+                    break;
+                }
                 let Some(step) = planner.next_step() else {
                     break;
                 };
                 follow(&mut self.command, self.path, &step, report);
-                if report.planned_time > MAX_PLANNED_TIME {
-                    report.undecided.push(format!(
-                        "the planner pass stopped after {MAX_PLANNED_TIME} s of machine time"
-                    ));
-                    self.planner = None;
+                if self.over_limit(&step, report) {
                     return;
                 }
             }
@@ -476,11 +591,11 @@ impl<'a> MachineChecks<'a> {
             return;
         };
         planner.finish();
-        while report.planned_time <= MAX_PLANNED_TIME {
-            let Some(step) = planner.next_step() else {
-                break;
-            };
+        while let Some(step) = self.planner.as_mut().and_then(Planner::next_step) {
             follow(&mut self.command, self.path, &step, report);
+            if self.over_limit(&step, report) {
+                break;
+            }
         }
     }
 }

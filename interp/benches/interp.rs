@@ -5,6 +5,9 @@
 //! blocks/s; each run also prints its CPU time, which stays meaningful on a loaded machine). `stream_10m_blocks_from_file`: ten million blocks streamed from a temporary
 //! file; a counting global allocator records the peak heap use, printed after the run.
 //! `syntax_check_1m_blocks`: the parse-only pass of `syntax_check` over a 1M-block file.
+//! `refuse_64mb_line`: a program whose third line is 64 MB without a line end, interpreted
+//! until the block-length error; the peak heap is printed (bounded by the block limit, not by
+//! the line).
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::io::Write;
@@ -163,6 +166,33 @@ fn stream_10m_blocks_from_file(bencher: divan::Bencher) {
             );
             ops
         });
+    let _ = std::fs::remove_file(&path);
+}
+
+#[divan::bench(sample_count = 3, sample_size = 1)]
+fn refuse_64mb_line(bencher: divan::Bencher) {
+    let path = std::env::temp_dir().join(format!("klar-bench-line-{}.h", std::process::id()));
+    {
+        let f = std::fs::File::create(&path).expect("temp file");
+        let mut w = std::io::BufWriter::new(f);
+        w.write_all(b"0 BEGIN PGM T MM\n1 L X+0 R0 FMAX\n")
+            .expect("write program");
+        let piece = vec![b'X'; 1 << 20];
+        for _ in 0..64 {
+            w.write_all(&piece).expect("write program");
+        }
+        w.flush().expect("flush");
+    }
+    bencher.bench_local(|| {
+        let base = LIVE.load(Ordering::Relaxed);
+        PEAK.store(base, Ordering::Relaxed);
+        let it = Interpreter::open(&path, Pose::ZERO).expect("open");
+        let errors = it.filter(Result::is_err).count();
+        assert_eq!(errors, 1);
+        let peak = PEAK.load(Ordering::Relaxed) - base;
+        println!("refuse a 64 MB line: peak heap {:.3} MB", peak as f64 / 1e6);
+        errors
+    });
     let _ = std::fs::remove_file(&path);
 }
 

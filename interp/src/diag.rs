@@ -58,6 +58,7 @@ impl Diagnostic {
         block: Option<u64>,
         message: String,
     ) -> Self {
+        let message = shorten_words(&message);
         let message = match block {
             Some(n) => format!("block {n}: {message}"),
             None => message,
@@ -72,6 +73,32 @@ impl Diagnostic {
     }
 }
 
+/// Longest word a diagnostic quotes from a program, in characters; a longer one is cut there
+/// and ends in `…`.
+pub const MAX_QUOTED_CHARS: usize = 80;
+
+/// `message` with every run of non-blank characters longer than [`MAX_QUOTED_CHARS`] cut to
+/// that length and marked with `…` (words of the program quoted in a message stay readable
+/// whatever the program holds; the message's own words are all shorter).
+pub fn shorten_words(message: &str) -> String {
+    let mut out = String::with_capacity(message.len().min(1024));
+    let mut run = 0usize;
+    for c in message.chars() {
+        if c.is_whitespace() {
+            run = 0;
+            out.push(c);
+            continue;
+        }
+        run += 1;
+        if run <= MAX_QUOTED_CHARS {
+            out.push(c);
+        } else if run == MAX_QUOTED_CHARS + 1 {
+            out.push('…');
+        }
+    }
+    out
+}
+
 /// Everything that can be wrong with a program or with reading it.
 #[derive(Debug, Clone, PartialEq, Error)]
 pub enum ProgramError {
@@ -84,6 +111,10 @@ pub enum ProgramError {
     /// The dialect could not be recognised from the name or the text.
     #[error("cannot tell the program dialect (expected .h Klartext, .i TNC ISO or .nc lathe DIN)")]
     UnknownDialect,
+    /// The path names something other than a regular file (a folder, a FIFO, a device):
+    /// reading it could block or never end, so it is refused before it is opened.
+    #[error("not a regular file ({0}): a program is read from a file")]
+    NotAFile(&'static str),
     /// The first block is not `BEGIN PGM`.
     #[error("missing BEGIN PGM: a Klartext program starts with `BEGIN PGM name MM|INCH`")]
     MissingBegin,
@@ -265,4 +296,28 @@ pub enum ProgramError {
     /// FK data that no contour satisfies.
     #[error("FK: the data of block {0} contradict the contour before it")]
     FkContradiction(String),
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn long_words_are_cut_in_messages() {
+        let long = "X".repeat(10_000);
+        let d = Diagnostic::with_message(
+            PathBuf::from("a.h"),
+            1,
+            1,
+            Some(3),
+            format!("unknown word '{long}' in L block"),
+        );
+        let quoted = format!("'{}…", "X".repeat(MAX_QUOTED_CHARS - 1));
+        assert_eq!(
+            d.message,
+            format!("block 3: unknown word {quoted} in L block")
+        );
+        // short words and multi-byte characters are kept as they are
+        assert_eq!(shorten_words("ä 'Ü' b"), "ä 'Ü' b");
+    }
 }

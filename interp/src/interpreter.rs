@@ -167,6 +167,10 @@ pub(crate) fn whole_file_error(file: &Path, error: &ProgramError) -> Diagnostic 
 
 /// Opens a program file and recognises its dialect.
 pub(crate) fn open_any(path: &Path) -> Result<(Dialect, Box<dyn ProgramInput>), Diagnostic> {
+    // a FIFO or a device would block or never end: refused before it is opened
+    if let Some(kind) = crate::files::not_a_file(path) {
+        return Err(whole_file_error(path, &ProgramError::NotAFile(kind)));
+    }
     let file =
         File::open(path).map_err(|e| whole_file_error(path, &ProgramError::Io(e.to_string())))?;
     let mut reader = BufReader::with_capacity(64 * 1024, file);

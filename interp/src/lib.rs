@@ -11,14 +11,16 @@ pub mod cycles;
 pub mod diag;
 pub mod dialect;
 pub mod din;
+mod files;
 mod interpreter;
 pub mod iso;
 pub(crate) mod klartext;
 pub mod op;
 mod source;
 
-pub use diag::{Diagnostic, ProgramError};
+pub use diag::{Diagnostic, MAX_QUOTED_CHARS, ProgramError, shorten_words};
 pub use dialect::{Dialect, detect_dialect};
+pub use files::{not_a_file, read_bounded};
 pub use interpreter::{
     CHECK_DIAGNOSTIC_LIMIT, CHECK_JUMP_LIMIT, CheckReport, Interpreter, MAX_PROGRAM_DEPTH,
     MAX_SUBPROGRAM_DEPTH, RUN_IDLE_JUMP_LIMIT, check, check_report, syntax_check,
@@ -26,8 +28,10 @@ pub use interpreter::{
 pub use klartext::contour::SPLINE_START_TOLERANCE;
 pub use klartext::cycle_table::{DatumTable, DatumTableError};
 pub use klartext::exec::{Blank, C_RADIUS_TOLERANCE, MAX_IPA};
+pub use klartext::table::MAX_TABLE_FILE;
 pub use klartext::tools::{Tool, ToolTable, ToolTableError};
 pub use op::{
     ApproachShape, AxisLetter, CompSide, CornerRule, Feed, Op, OpKind, Plane, Pose, SourceLoc,
     SplineAxis,
 };
+pub use source::MAX_BLOCK_BYTES;

@@ -16,6 +16,56 @@
 
 use std::io::{self, BufRead, Seek, SeekFrom};
 
+/// Longest block klar reads, in bytes (all its physical lines together, line ends included).
+///
+/// klar's own limit: NC programs keep blocks short (the longest in the corpus is about 110
+/// characters; a CYCL DEF with its parameters on continuation lines is a few hundred), so
+/// 4096 leaves ample room while a file without line ends (a stray binary, `/dev/zero`) cannot
+/// make the reader grow without bound. A longer block ends the program with an error at its
+/// first line.
+pub const MAX_BLOCK_BYTES: usize = 4096;
+
+/// The error of a block longer than [`MAX_BLOCK_BYTES`].
+fn too_long() -> io::Error {
+    io::Error::new(
+        io::ErrorKind::InvalidData,
+        format!(
+            "block longer than {MAX_BLOCK_BYTES} characters (klar's limit for one block; \
+             a file without line ends?)"
+        ),
+    )
+}
+
+/// Appends one physical line (up to and including `\n`) of `input` to `buf`, reading at most
+/// `room` bytes; returns the bytes read, 0 at the end of the input. More than `room` bytes
+/// without a line end is a block too long ([`too_long`]).
+fn read_line_bounded(input: &mut dyn BufRead, buf: &mut Vec<u8>, room: usize) -> io::Result<usize> {
+    let mut read = 0;
+    loop {
+        let avail = match input.fill_buf() {
+            Ok(a) => a,
+            Err(e) if e.kind() == io::ErrorKind::Interrupted => continue,
+            Err(e) => return Err(e),
+        };
+        if avail.is_empty() {
+            return Ok(read);
+        }
+        let (take, done) = match avail.iter().position(|&b| b == b'\n') {
+            Some(i) => (i + 1, true),
+            None => (avail.len(), false),
+        };
+        if read + take > room {
+            return Err(too_long());
+        }
+        buf.extend_from_slice(avail.get(..take).unwrap_or(&[]));
+        input.consume(take);
+        read += take;
+        if done {
+            return Ok(read);
+        }
+    }
+}
+
 /// A byte source the interpreter can read blocks from and seek in.
 pub(crate) trait ProgramInput: BufRead + Seek + Send {}
 impl<T: BufRead + Seek + Send> ProgramInput for T {}
@@ -106,7 +156,16 @@ impl BlockReader {
                 self.buf.push(b'\n');
             }
             let seg_start = self.buf.len();
-            let n = self.read_line()?;
+            let n = match self.read_line() {
+                Ok(n) => n,
+                Err(e) => {
+                    // the error is reported at the first line of the block
+                    self.end_pos = (start.line, 1);
+                    self.buf.clear();
+                    self.segs.clear();
+                    return Err(e);
+                }
+            };
             if n == 0 {
                 // nothing more: drop the separator pushed for a continuation
                 self.buf
@@ -156,10 +215,14 @@ impl BlockReader {
     fn read_line(&mut self) -> io::Result<usize> {
         if self.held_ready {
             self.held_ready = false;
+            if self.buf.len() + self.held.len() > MAX_BLOCK_BYTES {
+                return Err(too_long());
+            }
             self.buf.extend_from_slice(&self.held);
             return Ok(self.held.len());
         }
-        self.input.read_until(b'\n', &mut self.buf)
+        let room = MAX_BLOCK_BYTES.saturating_sub(self.buf.len());
+        read_line_bounded(&mut self.input, &mut self.buf, room)
     }
 
     /// True when the block read so far is an SPL block and the next line starts with a
@@ -171,7 +234,7 @@ impl BlockReader {
         }
         if !self.held_ready {
             self.held.clear();
-            if self.input.read_until(b'\n', &mut self.held)? == 0 {
+            if read_line_bounded(&mut self.input, &mut self.held, MAX_BLOCK_BYTES)? == 0 {
                 return Ok(false);
             }
             self.held_ready = true;
@@ -433,6 +496,39 @@ mod tests {
         r.next_block().unwrap();
         let x = r.text().iter().position(|&c| c == b'X').unwrap();
         assert_eq!(r.position(x), (1, 5));
+    }
+
+    #[test]
+    fn a_block_longer_than_the_limit_is_refused_without_reading_it_all() {
+        // a line of exactly the limit (line end included) is read
+        let mut line = vec![b'X'; MAX_BLOCK_BYTES - 1];
+        line.push(b'\n');
+        line.extend_from_slice(b"NEXT\n");
+        let mut r = reader(&line);
+        r.next_block().unwrap();
+        assert_eq!(r.text().len(), MAX_BLOCK_BYTES - 1);
+        r.next_block().unwrap();
+        assert_eq!(r.text(), b"NEXT");
+        // one byte more on line 2 is refused there; the reader stops right after the limit
+        let mut text = b"A\n".to_vec();
+        text.extend(std::iter::repeat_n(b'Y', 10 * MAX_BLOCK_BYTES));
+        let mut r = BlockReader::new(Box::new(io::BufReader::with_capacity(
+            64,
+            Cursor::new(text),
+        )));
+        r.next_block().unwrap();
+        let e = r.next_block().unwrap_err();
+        assert!(e.to_string().contains("longer than 4096 characters"), "{e}");
+        assert_eq!(r.end_position(), (2, 1));
+        assert!(r.text().is_empty());
+        // continuation lines count together
+        let mut text = Vec::new();
+        for _ in 0..MAX_BLOCK_BYTES / 4 {
+            text.extend_from_slice(b"Q1=1 ~\n");
+        }
+        text.extend_from_slice(b"Q1=1\n");
+        let mut r = reader(&text);
+        assert!(r.next_block().is_err());
     }
 
     #[test]

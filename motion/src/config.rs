@@ -26,11 +26,33 @@ pub struct PlannerConfig {
     pub tolerance: f64,
 }
 
+/// Servo periods the planner works with, s (50 µs … 100 ms): a shorter period makes the
+/// sample count of a move grow beyond what a control can compute in time, a longer one is no
+/// longer a servo loop.
+pub const PERIOD_RANGE: [f64; 2] = [50e-6, 0.1];
+
+/// Axis speeds the planner works with, mm/s or °/s (0.01 … 100 000).
+pub const VELOCITY_RANGE: [f64; 2] = [0.01, 1e5];
+
+/// Axis accelerations the planner works with, mm/s² or °/s² (0.1 … 10 000 000).
+pub const ACCELERATION_RANGE: [f64; 2] = [0.1, 1e7];
+
+/// Axis jerks the planner works with, mm/s³ or °/s³ (1 … 10 000 000 000).
+pub const JERK_RANGE: [f64; 2] = [1.0, 1e10];
+
+/// Largest path tolerance the planner works with, mm.
+pub const MAX_TOLERANCE: f64 = 10.0;
+
+/// Whether `v` lies within `[lo, hi]` (false for NaN).
+pub fn within(v: f64, [lo, hi]: [f64; 2]) -> bool {
+    v >= lo && v <= hi
+}
+
 /// A configuration value the planner cannot work with.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum ConfigError {
-    /// A limit of an axis is not a positive finite number.
-    #[error("axis {axis}: {what} must be a positive finite number, got {value}")]
+    /// A limit of an axis is not a number within its range.
+    #[error("axis {axis}: {what} must lie in {} … {}, got {value}", range[0], range[1])]
     BadLimit {
         /// The axis.
         axis: AxisLetter,
@@ -38,12 +60,14 @@ pub enum ConfigError {
         what: &'static str,
         /// The value given.
         value: f64,
+        /// The range it must lie in.
+        range: [f64; 2],
     },
-    /// The servo period is not a positive finite number.
-    #[error("servo period must be a positive finite number of seconds, got {0}")]
+    /// The servo period is not within [`PERIOD_RANGE`].
+    #[error("servo period must lie in {lo} … {hi} s, got {0}", lo = PERIOD_RANGE[0], hi = PERIOD_RANGE[1])]
     BadPeriod(f64),
-    /// The path tolerance is negative or not finite.
-    #[error("path tolerance must be a finite number >= 0 mm, got {0}")]
+    /// The path tolerance is negative, not finite or above [`MAX_TOLERANCE`].
+    #[error("path tolerance must lie in 0 … {MAX_TOLERANCE} mm, got {0}")]
     BadTolerance(f64),
     /// The start pose has a value that is not finite.
     #[error("start position of axis {0} is not a finite number")]
@@ -56,10 +80,10 @@ pub enum ConfigError {
 impl PlannerConfig {
     /// Checks every value; the planner refuses a configuration that fails here.
     pub fn validate(&self) -> Result<(), ConfigError> {
-        if !(self.period.is_finite() && self.period > 0.0) {
+        if !within(self.period, PERIOD_RANGE) {
             return Err(ConfigError::BadPeriod(self.period));
         }
-        if !(self.tolerance.is_finite() && self.tolerance >= 0.0) {
+        if !within(self.tolerance, [0.0, MAX_TOLERANCE]) {
             return Err(ConfigError::BadTolerance(self.tolerance));
         }
         if self.limits.iter().all(Option::is_none) {
@@ -67,13 +91,18 @@ impl PlannerConfig {
         }
         for (axis, limits) in AxisLetter::ALL.into_iter().zip(&self.limits) {
             let Some(l) = limits else { continue };
-            for (what, value) in [
-                ("max_velocity", l.max_velocity),
-                ("max_acceleration", l.max_acceleration),
-                ("max_jerk", l.max_jerk),
+            for (what, value, range) in [
+                ("max_velocity", l.max_velocity, VELOCITY_RANGE),
+                ("max_acceleration", l.max_acceleration, ACCELERATION_RANGE),
+                ("max_jerk", l.max_jerk, JERK_RANGE),
             ] {
-                if !(value.is_finite() && value > 0.0) {
-                    return Err(ConfigError::BadLimit { axis, what, value });
+                if !within(value, range) {
+                    return Err(ConfigError::BadLimit {
+                        axis,
+                        what,
+                        value,
+                        range,
+                    });
                 }
             }
         }

@@ -39,7 +39,8 @@ impl std::fmt::Display for ActivePreset {
 }
 
 fn load_datums(path: &Path, what: &str) -> Result<DatumTable, String> {
-    let text = std::fs::read(path).map_err(|e| format!("{what} {}: {e}", path.display()))?;
+    let text = klar_interp::read_bounded(path, klar_interp::MAX_TABLE_FILE)
+        .map_err(|e| format!("{what} {}: {e}", path.display()))?;
     // Tables saved on a control may be latin-1.
     let text: String = match String::from_utf8(text) {
         Ok(s) => s,

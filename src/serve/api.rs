@@ -342,6 +342,9 @@ fn start_pose(machine: &MachineConfig) -> Pose {
     machine.start_pose()
 }
 
+/// Largest program file the dashboard shows, bytes (its text is sent to the page whole).
+const MAX_SHOWN_PROGRAM: u64 = 16 * 1024 * 1024;
+
 async fn program(
     State(app): State<App>,
     Query(q): Query<NameQuery>,
@@ -351,7 +354,8 @@ async fn program(
     let name = q.name.clone();
     let inner = Arc::clone(&app.inner);
     let view = tokio::task::spawn_blocking(move || {
-        let bytes = std::fs::read(&path).map_err(|e| ApiError::Read(e.to_string()))?;
+        let bytes = klar_interp::read_bounded(&path, MAX_SHOWN_PROGRAM)
+            .map_err(|e| ApiError::Read(e.to_string()))?;
         let text = String::from_utf8(bytes)
             // Older controls write latin-1: every byte is its own code point.
             .unwrap_or_else(|e| e.into_bytes().iter().map(|&b| b as char).collect());

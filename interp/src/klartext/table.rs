@@ -95,14 +95,7 @@ pub(crate) fn read_bounded(path: &Path, limit: u64) -> Result<String, ProgramErr
             ProgramError::FileData(text)
         }
     };
-    let meta = std::fs::metadata(path).map_err(io)?;
-    if meta.len() > limit {
-        return Err(ProgramError::FileData(format!(
-            "{}: file larger than {limit} bytes",
-            path.display()
-        )));
-    }
-    let bytes = std::fs::read(path).map_err(io)?;
+    let bytes = crate::files::read_bounded(path, limit).map_err(io)?;
     Ok(bytes.iter().map(|&b| char::from(b)).collect())
 }
 

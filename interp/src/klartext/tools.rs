@@ -111,7 +111,8 @@ impl ToolTable {
 
     /// Reads a `TOOL.T` file.
     pub fn load(path: &std::path::Path) -> Result<Self, ToolTableError> {
-        let bytes = std::fs::read(path).map_err(|e| ToolTableError::Io(e.to_string()))?;
+        let bytes = crate::files::read_bounded(path, super::table::MAX_TABLE_FILE)
+            .map_err(|e| ToolTableError::Io(e.to_string()))?;
         // latin-1 decoding: every byte is one character, so columns stay aligned
         let text: String = bytes.iter().map(|&b| char::from(b)).collect();
         Self::parse(&text)
