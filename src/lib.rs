@@ -10,6 +10,7 @@
 pub mod bounds;
 pub mod config;
 pub mod faults;
+pub mod latency;
 pub mod machine;
 pub mod monitor;
 pub mod plot;

@@ -400,10 +400,11 @@ fn cmd_run(
         eprintln!("{}: {stop}", program.display());
         for a in &stop.axes {
             eprintln!(
-                "  axis {}: {:.3} units/s at the fault, stopped in {:.4}",
+                "  axis {}: {:.3} units/s at the fault, stopped in {:.4}, at rest at {:.4}",
                 a.axis,
                 a.velocity,
-                a.stop_distance()
+                a.stop_distance(),
+                a.position_at_rest
             );
         }
     }
@@ -421,6 +422,9 @@ fn cmd_run(
         }
         if report.realtime {
             say!("underruns:    {}", report.underruns);
+            if let Some(l) = &report.lateness {
+                say!("lateness:     {l}");
+            }
         }
     }
     match error {

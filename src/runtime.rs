@@ -29,6 +29,7 @@ mod error;
 mod events;
 pub mod guard;
 mod operator;
+mod pacing;
 mod spindle;
 mod stop;
 pub mod stream;
@@ -43,10 +44,11 @@ pub use error::RunError;
 use klar_interp::{AxisLetter, Op, SourceLoc};
 use klar_motion::{AxisFault, Planner, Sample, Step};
 pub use operator::{OperatorStop, StopLevel};
+use pacing::Pacer;
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use stop::PendingStop;
 use stream::OpStream;
 
@@ -69,9 +71,13 @@ pub struct RunReport {
     pub cycles: u64,
     /// Largest |following error| per machine axis.
     pub max_following_error: Vec<(AxisLetter, f64)>,
-    /// Cycles whose setpoints reached the axes later than one servo period behind schedule
-    /// (measured on the wall clock in realtime mode; injected `stall` faults in both modes).
+    /// Cycles whose setpoints missed their slot: in realtime mode a cycle that woke more
+    /// than half a servo period after its deadline on the wall clock (or, with an injected
+    /// `stall`, more than a period late); an injected `stall` longer than a period in
+    /// simulated runs.
     pub underruns: u64,
+    /// Wake-up lateness of the servo cycles on the wall clock (realtime runs).
+    pub lateness: Option<crate::latency::LatenessSummary>,
     /// Seconds spent waiting for the spindle to reach speed.
     pub spindle_wait: f64,
     /// True when the run used the wall clock.
@@ -111,7 +117,10 @@ pub struct Run<'a, 'w> {
     stop_requested: bool,
     trace: Option<TraceWriter<&'w mut dyn Write>>,
     report: RunReport,
-    wall_start: Instant,
+    /// The wall-clock deadlines of a realtime run.
+    pacer: Pacer,
+    /// Lateness of the last wake-up on the wall clock, s, and whether it missed its slot.
+    wall_late: (f64, bool),
     /// Machine time of the last cycle.
     t: f64,
     /// Machine time minus planner time: grows while the run waits (spindle).
@@ -152,7 +161,7 @@ impl Run<'_, '_> {
         self.wait_until(t);
         let (wall, injected) = self.lateness(t);
         let late = wall + injected;
-        if late > self.config.servo_period {
+        if self.wall_late.1 || late > self.config.servo_period {
             self.report.underruns += 1;
         }
         // Simulated plants run on machine time and do not mind a late wall clock: on an
@@ -224,14 +233,11 @@ impl Run<'_, '_> {
         self.check_operator()
     }
 
-    /// In realtime mode, sleeps until the cycle due at machine time `t`.
-    fn wait_until(&self, t: f64) {
+    /// In realtime mode, sleeps until the deadline of the cycle due at machine time `t`
+    /// (see [`pacing`]).
+    fn wait_until(&mut self, t: f64) {
         if self.report.realtime {
-            let due = self.wall_start + Duration::from_secs_f64(t);
-            let now = Instant::now();
-            if now < due {
-                std::thread::sleep(due - now);
-            }
+            self.wall_late = self.pacer.wait(t);
         }
     }
 
@@ -239,11 +245,11 @@ impl Run<'_, '_> {
     /// wall-clock delay in realtime mode, and any injected stall that strikes now (which a
     /// realtime run also really waits out).
     fn lateness(&mut self, t: f64) -> (f64, f64) {
-        let mut wall = 0.0;
-        if self.report.realtime {
-            let due = self.wall_start + Duration::from_secs_f64(t);
-            wall = Instant::now().saturating_duration_since(due).as_secs_f64();
-        }
+        let wall = if self.report.realtime {
+            self.wall_late.0
+        } else {
+            0.0
+        };
         let mut late = 0.0;
         while let Some(&(at, seconds)) = self.stalls.front() {
             if at > t {
@@ -252,7 +258,7 @@ impl Run<'_, '_> {
             self.stalls.pop_front();
             if self.report.realtime {
                 std::thread::sleep(Duration::from_secs_f64(seconds));
-                self.wall_start += Duration::from_secs_f64(seconds);
+                self.pacer.delay(seconds);
             }
             late += seconds;
         }
@@ -479,7 +485,8 @@ impl<'a, 'w> Run<'a, 'w> {
             stop_requested: false,
             trace,
             report,
-            wall_start: Instant::now(),
+            pacer: Pacer::new(config.servo_period),
+            wall_late: (0.0, false),
             t: 0.0,
             shift: 0.0,
             line: 0,
@@ -625,6 +632,9 @@ impl<'a, 'w> Run<'a, 'w> {
     pub fn finish(mut self, error: Option<RunError>) -> Result<RunReport, Box<RunFailure>> {
         self.report.blocks = self.ops.blocks_executed();
         let disabled = self.io.disable();
+        if self.report.realtime {
+            self.report.lateness = Some(self.pacer.histogram.summary());
+        }
         let report = self.report;
         let trace_done = match self.trace {
             Some(t) => t.finish(),

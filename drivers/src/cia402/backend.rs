@@ -53,7 +53,17 @@ impl Cia402Backend {
     /// A simulated bus is built by `klar_sim::cia402::simulated_backend` instead.
     pub fn open(config: &CanOpenConfig, servo_period: f64) -> Result<Self, Cia402Error> {
         let bus = open_bus(config)?;
-        Self::with_bus(config, servo_period, bus)
+        let backend = Self::with_bus(config, servo_period, bus)?;
+        backend.set_paced(true);
+        Ok(backend)
+    }
+
+    /// Paces the exchanges outside the servo loop (enable, disable, fault reset, the wait
+    /// for a quick stop) on the wall clock, one servo period apart: on for a real bus
+    /// ([`Cia402Backend::open`]), off for buses built with [`Cia402Backend::with_bus`]
+    /// until set here.
+    pub fn set_paced(&self, paced: bool) {
+        lock(&self.net).paced = paced;
     }
 
     /// Starts the drives of `config` on `bus` with SYNC every `servo_period` seconds.
@@ -141,6 +151,8 @@ impl Network {
     }
 
     fn disable_axes(&mut self) -> Result<(), BackendError> {
+        // A drive in QUICK STOP ACTIVE is still braking: voltage goes off at standstill.
+        self.wait_quick_stops();
         self.drive_sequence(
             None,
             |d| match d.power() {

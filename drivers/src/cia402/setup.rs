@@ -136,6 +136,8 @@ impl Network {
             heartbeat_timeout,
             stop: None,
             servo_period,
+            paced: false,
+            last_sync: None,
         };
         // A first exchange reads every drive's state and position.
         backend.exchange();
@@ -183,6 +185,7 @@ fn new_drive(cfg: &DriveConfig) -> Result<Drive, Cia402Error> {
     )?;
     drive.position_gain = cfg.gain();
     drive.following_window = cfg.following_error_window.map(f64::abs);
+    drive.quick_stop_deceleration = cfg.quick_stop_deceleration;
     Ok(drive)
 }
 
@@ -249,6 +252,9 @@ fn make_drive(
         position_gain: 0.0,
         following_window: None,
         same_target: 0,
+        quick_stop_deceleration: None,
+        still_for: 0,
+        speed: 0.0,
     })
 }
 
@@ -342,6 +348,20 @@ fn configure_drive(
             FOLLOWING_ERROR_WINDOW,
             0,
             &d.scaling.magnitude_counts(w).to_le_bytes(),
+        )?;
+    }
+    if let Some(a) = cfg.and_then(|c| c.quick_stop_deceleration) {
+        master.sdo_write(
+            node,
+            QUICK_STOP_DECELERATION,
+            0,
+            &d.scaling.magnitude_counts(a).to_le_bytes(),
+        )?;
+        master.sdo_write(
+            node,
+            QUICK_STOP_OPTION,
+            0,
+            &QUICK_STOP_HOLD_OPTION.to_le_bytes(),
         )?;
     }
     if let Some(v) = cfg.and_then(|c| c.profile_velocity) {
