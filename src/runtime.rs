@@ -129,6 +129,13 @@ pub struct Run<'a, 'w> {
     line: u32,
     commanded: Vec<f64>,
     actual: Vec<f64>,
+    /// Per machine axis: the command the measured position answers (the one sent a
+    /// feedback lag earlier), for the following-error check.
+    reference: Vec<f64>,
+    /// The commands sent with the last cycle.
+    last_sent: Vec<f64>,
+    /// Per machine axis: cycles its feedback lags behind its setpoints.
+    lags: Vec<u32>,
     warned_no_spindle: bool,
     /// Per machine axis: (in-position window, settle timeout) for positioning-only axes.
     positioning: Vec<Option<(f64, f64)>>,
@@ -204,7 +211,7 @@ impl Run<'_, '_> {
                 });
             }
             if let Some(limit) = self.fe_limits[i] {
-                let e = self.commanded[i] - self.actual[i];
+                let e = self.reference[i] - self.actual[i];
                 if e.abs() > limit || e.is_nan() {
                     return Err(RunError::Fault {
                         axis: self.letters[i],
@@ -270,6 +277,15 @@ impl Run<'_, '_> {
         self.t = t;
         self.report.cycles += 1;
         self.report.machine_time = t;
+        for i in 0..self.commanded.len() {
+            let lagging = self.lags.get(i).is_some_and(|&l| l > 0);
+            self.reference[i] = if lagging {
+                self.last_sent[i]
+            } else {
+                self.commanded[i]
+            };
+            self.last_sent[i] = self.commanded[i];
+        }
         for (i, f) in self.io.feedback().iter().enumerate() {
             self.actual[i] = f.position;
             let fe = f.following_error.abs();
@@ -471,6 +487,7 @@ impl<'a, 'w> Run<'a, 'w> {
             }
         }
         let n = letters.len();
+        let lags = io.feedback_lags();
         Ok(Run {
             path,
             config,
@@ -492,6 +509,9 @@ impl<'a, 'w> Run<'a, 'w> {
             line: 0,
             commanded: config.axes.iter().map(|a| a.start).collect(),
             actual: vec![0.0; n],
+            reference: config.axes.iter().map(|a| a.start).collect(),
+            last_sent: config.axes.iter().map(|a| a.start).collect(),
+            lags,
             warned_no_spindle: false,
             positioning: positioning_axes(config),
             last_loc: None,

@@ -131,6 +131,14 @@ pub trait AxisBackend {
         setpoints: &[Setpoint],
         feedback: &mut [AxisFeedback],
     ) -> Result<(), BackendError>;
+
+    /// How many servo cycles the feedback of [`AxisBackend::cycle`] lags behind the
+    /// setpoints handed over with it (1 for a bus exchange that uses the answers to the SYNC
+    /// before); following errors compare the feedback with the setpoints that many cycles
+    /// back.
+    fn feedback_lag(&self) -> u32 {
+        0
+    }
 }
 
 /// What a spindle reports back.

@@ -24,6 +24,7 @@
 //! timeout). A fault of any drive stops every drive (see [`super::network`]).
 
 use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
 
 use klar_motion::{AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError, Setpoint};
 
@@ -55,6 +56,7 @@ impl Cia402Backend {
         let bus = open_bus(config)?;
         let backend = Self::with_bus(config, servo_period, bus)?;
         backend.set_paced(true);
+        lock(&backend.net).check_round_trip()?;
         Ok(backend)
     }
 
@@ -114,7 +116,58 @@ impl Cia402Backend {
     }
 }
 
+/// Exchanges timed at start-up to measure the round trip through the adapter.
+const ROUND_TRIP_SAMPLES: usize = 11;
+/// The share of the servo period the round trip may take: pipelined, the answers must be
+/// in before the next SYNC; waiting for them, the cycle's own work must fit as well.
+const ROUND_TRIP_SHARE_PIPELINED: f64 = 0.8;
+const ROUND_TRIP_SHARE_WAITING: f64 = 0.5;
+
 impl Network {
+    /// Times [`ROUND_TRIP_SAMPLES`] paced exchanges (SYNC to the last transmit PDO) and
+    /// refuses a servo period the median round trip does not fit, naming one that would.
+    pub(crate) fn check_round_trip(&mut self) -> Result<f64, Cia402Error> {
+        let mut samples = Vec::with_capacity(ROUND_TRIP_SAMPLES);
+        for _ in 0..ROUND_TRIP_SAMPLES {
+            for d in self.drives.iter_mut() {
+                d.target = d.hold_target();
+            }
+            self.pace();
+            self.exchange();
+            self.handle_events();
+            if let Some(rt) = self.round_trip {
+                samples.push(rt);
+            }
+        }
+        samples.sort_by(f64::total_cmp);
+        let Some(&median) = samples.get(samples.len() / 2) else {
+            return Err(Cia402Error::Config(
+                "no exchange got every transmit PDO back while timing the round trip".into(),
+            ));
+        };
+        let share = if self.pipelined() {
+            ROUND_TRIP_SHARE_PIPELINED
+        } else {
+            ROUND_TRIP_SHARE_WAITING
+        };
+        tracing::info!(
+            round_trip_ms = median * 1e3,
+            "SYNC to transmit PDO round trip through the adapter"
+        );
+        if median > share * self.servo_period {
+            let fits = (median / share / 0.000_25).ceil() * 0.25;
+            return Err(Cia402Error::Config(format!(
+                "the round trip SYNC → transmit PDOs through the adapter takes {:.2} ms, more \
+                 than {:.0} % of the {} ms servo period; a servo period of {fits} ms or \
+                 longer would fit",
+                median * 1e3,
+                share * 100.0,
+                self.servo_period * 1e3
+            )));
+        }
+        Ok(median)
+    }
+
     fn enable_axes(&mut self) -> Result<(), BackendError> {
         if let Some(stop) = &self.stop {
             return Err(BackendError::InvalidState(format!(
@@ -262,9 +315,25 @@ impl Network {
 
     /// One servo cycle at `t`: axis setpoints (one per axis) and the spindle command go
     /// out, feedback comes in.
+    ///
+    /// Pipelined ([`Network::pipelined`]): the transmit PDOs answering the last SYNC are
+    /// collected and evaluated first (they had a servo period to arrive), then this cycle's
+    /// receive PDOs and SYNC go out without waiting for their answers.
     pub(crate) fn cycle(&mut self, t: f64, setpoints: &[Setpoint]) {
         self.master.set_time(t);
-        if let Err(e) = self.master.poll() {
+        let pipelined = self.pipelined();
+        if pipelined {
+            let wait = self.last_sync.map_or(Duration::ZERO, |s| {
+                (s + self.pdo_wait).saturating_duration_since(Instant::now())
+            });
+            self.collect(wait);
+            self.handle_events();
+            self.evaluate();
+            self.apply_stop();
+            for d in self.drives.iter_mut() {
+                d.answered = d.commanded;
+            }
+        } else if let Err(e) = self.master.poll() {
             self.stop_all(
                 None,
                 AxisFault::CommunicationLost,
@@ -372,10 +441,19 @@ impl Network {
             );
         }
         self.apply_stop();
+        if pipelined {
+            self.send_cyclic();
+            self.handle_events();
+            self.apply_stop();
+            return;
+        }
         self.exchange();
         self.handle_events();
         self.evaluate();
         self.apply_stop();
+        for d in self.drives.iter_mut() {
+            d.answered = d.commanded;
+        }
     }
 }
 
@@ -405,6 +483,11 @@ fn profile_setpoint(d: &mut super::network::Drive, wanted: i32) {
 impl AxisBackend for Cia402Backend {
     fn axis_count(&self) -> usize {
         lock(&self.net).axes
+    }
+
+    /// 1 when the exchange is pipelined (the positions answer the SYNC before), else 0.
+    fn feedback_lag(&self) -> u32 {
+        u32::from(lock(&self.net).pipelined())
     }
 
     fn enable(&mut self) -> Result<(), BackendError> {
@@ -445,7 +528,7 @@ impl AxisBackend for Cia402Backend {
         for (d, fb) in net.drives.iter().zip(feedback.iter_mut()) {
             let position = d.scaling.to_units(d.actual);
             fb.position = position;
-            fb.following_error = d.commanded - position;
+            fb.following_error = d.answered - position;
             fb.homed = d.homed;
             fb.fault = d.fault.clone();
             fb.state = if d.fault.is_some() || d.power().is_fault() {

@@ -138,6 +138,7 @@ impl Network {
             servo_period,
             paced: false,
             last_sync: None,
+            round_trip: None,
         };
         // A first exchange reads every drive's state and position.
         backend.exchange();
@@ -255,6 +256,7 @@ fn make_drive(
         quick_stop_deceleration: None,
         still_for: 0,
         speed: 0.0,
+        answered: 0.0,
     })
 }
 
