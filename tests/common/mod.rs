@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod mill5;
+pub mod peers;
 
 use klar::config::MachineConfig;
 use klar::runtime::{RunFailure, RunOptions, RunReport, run_program};
