@@ -14,6 +14,7 @@ pub mod latency;
 pub mod machine;
 pub mod monitor;
 pub mod plot;
+pub mod rt;
 pub mod runtime;
 pub mod serve;
 pub mod state;

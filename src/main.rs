@@ -102,6 +102,20 @@ enum Command {
         #[arg(long, env = "KLAR_TOKEN")]
         token: Option<String>,
     },
+    /// Measure this computer's wake-up latency: a thread sleeps to absolute deadlines one
+    /// period apart and counts how late it wakes (as LinuxCNC's latency-test); prints a
+    /// histogram and p50 / p99 / p99.99 / max.
+    Latency {
+        /// How long to measure, s.
+        #[arg(long, default_value_t = 10.0)]
+        seconds: f64,
+        /// Period of the deadlines, s (the servo period to judge).
+        #[arg(long, default_value_t = 0.001)]
+        period: f64,
+        /// Ask for SCHED_FIFO and locked memory (says so when refused).
+        #[arg(long)]
+        fifo: bool,
+    },
     /// Print the canonical op stream, one JSON object per line.
     Ops {
         /// The program file.
@@ -145,6 +159,11 @@ fn main() -> ExitCode {
             faults,
             quiet,
         ),
+        Command::Latency {
+            seconds,
+            period,
+            fifo,
+        } => cmd_latency(seconds, period, fifo),
         Command::Ops {
             program,
             machine,
@@ -438,6 +457,60 @@ fn cmd_run(
             ExitCode::FAILURE
         }
     }
+}
+
+fn cmd_latency(seconds: f64, period: f64, fifo: bool) -> ExitCode {
+    if !(period.is_finite() && period > 0.0 && period <= 1.0) {
+        eprintln!("--period must be a number of seconds in (0, 1], got {period}");
+        return ExitCode::FAILURE;
+    }
+    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 86_400.0) {
+        eprintln!("--seconds must be a number of seconds in (0, 86400], got {seconds}");
+        return ExitCode::FAILURE;
+    }
+    let measured = std::thread::Builder::new()
+        .name("klar-latency".into())
+        .spawn(move || {
+            let status = fifo.then(|| klar::rt::make_realtime(klar::rt::FIFO_PRIORITY));
+            (status, klar::latency::measure(period, seconds))
+        })
+        .map_err(|e| e.to_string())
+        .and_then(|h| {
+            h.join()
+                .map_err(|_| "the measuring thread failed".to_string())
+        });
+    let (status, hist) = match measured {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("latency: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    match &status {
+        Some(s) if s.fifo.is_ok() => println!("scheduling:   {s}"),
+        Some(s) => {
+            eprintln!("warning: {s}");
+            println!("scheduling:   ordinary (SCHED_FIFO refused)");
+        }
+        None => println!("scheduling:   ordinary (no --fifo)"),
+    }
+    println!("period:       {:.3} ms for {seconds} s", period * 1e3);
+    println!("wake-up lateness, µs (upper bucket edge) and count:");
+    let total = hist.total().max(1) as f64;
+    for (us, count) in hist.rows() {
+        let bar = "#".repeat(((count as f64 / total) * 50.0).ceil() as usize);
+        println!("{us:>9.0} {count:>9} {bar}");
+    }
+    let s = hist.summary();
+    println!("lateness:     {s}");
+    let missed = hist.quantile_ns(1.0) as f64 * 1e-9 > period / 2.0;
+    if missed {
+        println!(
+            "at least one wake-up was more than half a period late: a servo loop at this \
+             period would count underruns"
+        );
+    }
+    ExitCode::SUCCESS
 }
 
 fn cmd_serve(
