@@ -63,6 +63,10 @@ enum Command {
         /// Run the servo loop on the wall clock.
         #[arg(long)]
         realtime: bool,
+        /// Realtime runs: ask for SCHED_FIFO and locked memory for the servo loop's thread
+        /// (says so when refused; the progress bar is left out).
+        #[arg(long)]
+        fifo: bool,
         /// Inject a fault into the simulated axes: KIND[:AXIS]@SECONDS with KIND one of
         /// drive, comm, noise, stuck, limit, estop (e.g. `drive:X@0.5`, `estop@1.2`).
         #[arg(long = "fault", value_name = "SPEC")]
@@ -150,12 +154,13 @@ fn main() -> ExitCode {
             machine,
             trace,
             realtime,
+            fifo,
             faults,
         } => cmd_run(
             &program,
             machine.as_deref(),
             trace.as_deref(),
-            realtime,
+            (realtime, fifo),
             faults,
             quiet,
         ),
@@ -373,7 +378,7 @@ fn cmd_run(
     program: &Path,
     machine: Option<&Path>,
     trace: Option<&Path>,
-    realtime: bool,
+    (realtime, fifo): (bool, bool),
     faults: Vec<klar::faults::FaultConfig>,
     quiet: bool,
 ) -> ExitCode {
@@ -392,16 +397,20 @@ fn cmd_run(
             }
         },
     };
-    let options = RunOptions {
-        realtime,
-        trace: trace_file.as_mut().map(|w| w as &mut dyn Write),
-    };
     // SIGINT and SIGTERM stop the run under control from here on.
     let signals = signals::SignalWatch::install()
         .inspect_err(|e| eprintln!("warning: signals will end the run abruptly: {e}"))
         .ok();
     let stop = signals.as_ref().map(signals::SignalWatch::stop);
-    let result = progress::run_with_progress(program, &config, options, quiet, stop);
+    let result = if realtime || config.needs_wall_clock() {
+        servo_thread(program, &config, trace_file, fifo, quiet, stop)
+    } else {
+        let options = RunOptions {
+            realtime,
+            trace: trace_file.as_mut().map(|w| w as &mut dyn Write),
+        };
+        progress::run_with_progress(program, &config, options, quiet, stop)
+    };
     let (report, error) = match result {
         Ok(r) => (r, None),
         Err(f) => (f.report, Some(f.error)),
@@ -457,6 +466,66 @@ fn cmd_run(
             ExitCode::FAILURE
         }
     }
+}
+
+/// A realtime run: the servo loop in a thread of its own (SCHED_FIFO and locked memory with
+/// `fifo`, where allowed), the trace handed through a queue to a writer thread.
+fn servo_thread(
+    program: &Path,
+    config: &MachineConfig,
+    trace_file: Option<BufWriter<std::fs::File>>,
+    fifo: bool,
+    quiet: bool,
+    stop: Option<klar::runtime::OperatorStop>,
+) -> Result<klar::runtime::RunReport, Box<klar::runtime::RunFailure>> {
+    let failed = |what: String| {
+        Box::new(klar::runtime::RunFailure {
+            error: RunError::Machine(klar::machine::MachineError::Open {
+                what: "servo thread".into(),
+                message: what,
+            }),
+            report: klar::runtime::RunReport::default(),
+        })
+    };
+    std::thread::scope(|scope| {
+        let (queue, drained) = match trace_file {
+            Some(file) => {
+                let (writer, rx) = klar::rt::chunk_queue();
+                let handle = std::thread::Builder::new()
+                    .name("klar-trace".into())
+                    .spawn_scoped(scope, move || klar::rt::drain(rx, file))
+                    .map_err(|e| failed(e.to_string()))?;
+                (Some(writer), Some(handle))
+            }
+            None => (None, None),
+        };
+        let servo = std::thread::Builder::new()
+            .name("klar-servo".into())
+            .spawn_scoped(scope, move || {
+                let mut queue = queue;
+                if fifo {
+                    let status = klar::rt::make_realtime(klar::rt::FIFO_PRIORITY);
+                    if status.fifo.is_ok() && status.locked.is_ok() {
+                        tracing::info!("servo loop: {status}");
+                    } else {
+                        eprintln!("warning: servo loop: {status}");
+                    }
+                }
+                let options = RunOptions {
+                    realtime: true,
+                    trace: queue.as_mut().map(|w| w as &mut dyn Write),
+                };
+                progress::run_with_progress(program, config, options, quiet || fifo, stop)
+            })
+            .map_err(|e| failed(e.to_string()))?;
+        let result = servo
+            .join()
+            .unwrap_or_else(|_| Err(failed("the servo thread panicked".into())));
+        if let Some(Ok(Err(e))) = drained.map(|h| h.join()) {
+            eprintln!("warning: writing the trace: {e}");
+        }
+        result
+    })
 }
 
 fn cmd_latency(seconds: f64, period: f64, fifo: bool) -> ExitCode {
