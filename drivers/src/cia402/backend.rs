@@ -119,8 +119,9 @@ impl Cia402Backend {
 /// Exchanges timed at start-up to measure the round trip through the adapter.
 const ROUND_TRIP_SAMPLES: usize = 11;
 /// The share of the servo period the round trip may take: pipelined, the answers must be
-/// in before the next SYNC; waiting for them, the cycle's own work must fit as well.
-const ROUND_TRIP_SHARE_PIPELINED: f64 = 0.8;
+/// in before the next SYNC (a late one is waited for a quarter period); waiting for them,
+/// the cycle's own work must fit as well.
+const ROUND_TRIP_SHARE_PIPELINED: f64 = 1.0;
 const ROUND_TRIP_SHARE_WAITING: f64 = 0.5;
 
 impl Network {
@@ -323,8 +324,13 @@ impl Network {
         self.master.set_time(t);
         let pipelined = self.pipelined();
         if pipelined {
+            // The answers had a servo period to arrive: a late one is not waited for beyond
+            // a quarter period (the cycle must keep its deadline); it counts as missing.
+            let grace = Duration::from_secs_f64(self.servo_period / 4.0);
             let wait = self.last_sync.map_or(Duration::ZERO, |s| {
-                (s + self.pdo_wait).saturating_duration_since(Instant::now())
+                (s + self.pdo_wait)
+                    .saturating_duration_since(Instant::now())
+                    .min(grace)
             });
             self.collect(wait);
             self.handle_events();
