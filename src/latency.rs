@@ -28,7 +28,7 @@ pub fn now_ns() -> i64 {
     unsafe {
         libc::clock_gettime(libc::CLOCK_MONOTONIC, &mut ts);
     }
-    i64::from(ts.tv_sec) * 1_000_000_000 + i64::from(ts.tv_nsec)
+    ts.tv_sec * 1_000_000_000 + ts.tv_nsec
 }
 
 /// Sleeps until the monotonic clock reads `deadline_ns` (an absolute deadline: a wake-up

@@ -78,7 +78,8 @@ pub struct RunReport {
     pub underruns: u64,
     /// Wake-up lateness of the servo cycles on the wall clock (realtime runs).
     pub lateness: Option<crate::latency::LatenessSummary>,
-    /// Seconds spent waiting for the spindle to reach speed.
+    /// Seconds spent waiting for the spindle to reach speed (on the wall clock in realtime
+    /// runs).
     pub spindle_wait: f64,
     /// True when the run used the wall clock.
     pub realtime: bool,
