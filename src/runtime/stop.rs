@@ -258,13 +258,25 @@ impl Run<'_, '_> {
             }
         }
         report.t_rest = self.t;
-        for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
-            f.position_at_rest = x;
-        }
         // At rest the drives are switched off: a faulted machine waits powerless for its
         // reset (an axis the monitor tripped may still pull toward an unreachable command).
         if let Err(e) = self.io.disable() {
             tracing::warn!("quick stop: disabling the drives: {e}");
+        }
+        if self.report.realtime {
+            // A bus backend switches a braking drive off only at its standstill, which can
+            // come after the loop above took late (unchanged) answers for rest: one more
+            // cycle reads where the drives came to rest.
+            let t = self.t + period;
+            self.wait_until(t);
+            if self.io.cycle(t).is_ok() {
+                for (a, f) in self.actual.iter_mut().zip(self.io.feedback()) {
+                    *a = f.position;
+                }
+            }
+        }
+        for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
+            f.position_at_rest = x;
         }
         tracing::warn!("{report}");
         self.report.stop = Some(report.clone());
