@@ -10,9 +10,11 @@
 pub mod bounds;
 pub mod config;
 pub mod faults;
+pub mod latency;
 pub mod machine;
 pub mod monitor;
 pub mod plot;
+pub mod rt;
 pub mod runtime;
 pub mod serve;
 pub mod state;

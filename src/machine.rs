@@ -624,6 +624,21 @@ impl MachineIo {
         &self.feedback
     }
 
+    /// Per machine axis: how many servo cycles its feedback lags behind its setpoints
+    /// ([`AxisBackend::feedback_lag`]).
+    pub fn feedback_lags(&self) -> Vec<u32> {
+        let mut lags = vec![0; self.feedback.len()];
+        for slot in &self.slots {
+            let lag = slot.backend.feedback_lag();
+            for &i in &slot.axes {
+                if let Some(l) = lags.get_mut(i) {
+                    *l = lag;
+                }
+            }
+        }
+        lags
+    }
+
     /// The spindle, if the machine has one.
     pub fn spindle_mut(&mut self) -> Option<&mut Spindle> {
         self.spindle.as_mut()
@@ -645,6 +660,10 @@ struct Recording {
 
 #[cfg(test)]
 impl AxisBackend for Recording {
+    fn feedback_lag(&self) -> u32 {
+        self.inner.feedback_lag()
+    }
+
     fn axis_count(&self) -> usize {
         self.inner.axis_count()
     }

@@ -71,6 +71,10 @@ enum Command {
         /// Run the servo loop on the wall clock.
         #[arg(long)]
         realtime: bool,
+        /// Realtime runs: ask for SCHED_FIFO and locked memory for the servo loop's thread
+        /// (says so when refused; the progress bar is left out).
+        #[arg(long)]
+        fifo: bool,
         /// Inject a fault into the simulated axes: KIND[:AXIS]@SECONDS with KIND one of
         /// drive, comm, noise, stuck, limit, estop (e.g. `drive:X@0.5`, `estop@1.2`).
         #[arg(long = "fault", value_name = "SPEC")]
@@ -109,6 +113,20 @@ enum Command {
         /// Access token every API call must carry (`?token=` or `Authorization: Bearer`).
         #[arg(long, env = "KLAR_TOKEN")]
         token: Option<String>,
+    },
+    /// Measure this computer's wake-up latency: a thread sleeps to absolute deadlines one
+    /// period apart and counts how late it wakes (as LinuxCNC's latency-test); prints a
+    /// histogram and p50 / p99 / p99.99 / max.
+    Latency {
+        /// How long to measure, s.
+        #[arg(long, default_value_t = 10.0)]
+        seconds: f64,
+        /// Period of the deadlines, s (the servo period to judge).
+        #[arg(long, default_value_t = 0.001)]
+        period: f64,
+        /// Ask for SCHED_FIFO and locked memory (says so when refused).
+        #[arg(long)]
+        fifo: bool,
     },
     /// Print the canonical op stream, one JSON object per line.
     Ops {
@@ -156,15 +174,21 @@ fn main() -> ExitCode {
             machine,
             trace,
             realtime,
+            fifo,
             faults,
         } => cmd_run(
             &program,
             machine.as_deref(),
             trace.as_deref(),
-            realtime,
+            (realtime, fifo),
             faults,
             quiet,
         ),
+        Command::Latency {
+            seconds,
+            period,
+            fifo,
+        } => cmd_latency(seconds, period, fifo),
         Command::Ops {
             program,
             machine,
@@ -404,7 +428,7 @@ fn cmd_run(
     program: &Path,
     machine: Option<&Path>,
     trace: Option<&Path>,
-    realtime: bool,
+    (realtime, fifo): (bool, bool),
     faults: Vec<klar::faults::FaultConfig>,
     quiet: bool,
 ) -> ExitCode {
@@ -423,16 +447,20 @@ fn cmd_run(
             }
         },
     };
-    let options = RunOptions {
-        realtime,
-        trace: trace_file.as_mut().map(|w| w as &mut dyn Write),
-    };
     // SIGINT and SIGTERM stop the run under control from here on.
     let signals = signals::SignalWatch::install()
         .inspect_err(|e| eprintln!("warning: signals will end the run abruptly: {e}"))
         .ok();
     let stop = signals.as_ref().map(signals::SignalWatch::stop);
-    let result = progress::run_with_progress(program, &config, options, quiet, stop);
+    let result = if realtime || config.needs_wall_clock() {
+        servo_thread(program, &config, trace_file, fifo, quiet, stop)
+    } else {
+        let options = RunOptions {
+            realtime,
+            trace: trace_file.as_mut().map(|w| w as &mut dyn Write),
+        };
+        progress::run_with_progress(program, &config, options, quiet, stop)
+    };
     let (report, error) = match result {
         Ok(r) => (r, None),
         Err(f) => (f.report, Some(f.error)),
@@ -450,10 +478,11 @@ fn cmd_run(
         eprintln!("{}: {stop}", program.display());
         for a in &stop.axes {
             eprintln!(
-                "  axis {}: {:.3} units/s at the fault, stopped in {:.4}",
+                "  axis {}: {:.3} units/s at the fault, stopped in {:.4}, at rest at {:.4}",
                 a.axis,
                 a.velocity,
-                a.stop_distance()
+                a.stop_distance(),
+                a.position_at_rest
             );
         }
     }
@@ -484,6 +513,9 @@ fn cmd_run(
         }
         if report.realtime {
             say!("underruns:    {}", report.underruns);
+            if let Some(l) = &report.lateness {
+                say!("lateness:     {l}");
+            }
         }
     }
     let code = match error {
@@ -509,6 +541,120 @@ fn cmd_run(
         }
         None => code,
     }
+}
+
+/// A realtime run: the servo loop in a thread of its own (SCHED_FIFO and locked memory with
+/// `fifo`, where allowed), the trace handed through a queue to a writer thread.
+fn servo_thread(
+    program: &Path,
+    config: &MachineConfig,
+    trace_file: Option<BufWriter<std::fs::File>>,
+    fifo: bool,
+    quiet: bool,
+    stop: Option<klar::runtime::OperatorStop>,
+) -> Result<klar::runtime::RunReport, Box<klar::runtime::RunFailure>> {
+    let failed = |what: String| {
+        Box::new(klar::runtime::RunFailure {
+            error: RunError::Machine(klar::machine::MachineError::Open {
+                what: "servo thread".into(),
+                message: what,
+            }),
+            report: klar::runtime::RunReport::default(),
+        })
+    };
+    std::thread::scope(|scope| {
+        let (queue, drained) = match trace_file {
+            Some(file) => {
+                let (writer, rx) = klar::rt::chunk_queue();
+                let handle = std::thread::Builder::new()
+                    .name("klar-trace".into())
+                    .spawn_scoped(scope, move || klar::rt::drain(rx, file))
+                    .map_err(|e| failed(e.to_string()))?;
+                (Some(writer), Some(handle))
+            }
+            None => (None, None),
+        };
+        let servo = std::thread::Builder::new()
+            .name("klar-servo".into())
+            .spawn_scoped(scope, move || {
+                let mut queue = queue;
+                if fifo {
+                    let status = klar::rt::make_realtime(klar::rt::FIFO_PRIORITY);
+                    if status.fifo.is_ok() && status.locked.is_ok() {
+                        tracing::info!("servo loop: {status}");
+                    } else {
+                        eprintln!("warning: servo loop: {status}");
+                    }
+                }
+                let options = RunOptions {
+                    realtime: true,
+                    trace: queue.as_mut().map(|w| w as &mut dyn Write),
+                };
+                progress::run_with_progress(program, config, options, quiet || fifo, stop)
+            })
+            .map_err(|e| failed(e.to_string()))?;
+        let result = servo
+            .join()
+            .unwrap_or_else(|_| Err(failed("the servo thread panicked".into())));
+        if let Some(Ok(Err(e))) = drained.map(|h| h.join()) {
+            eprintln!("warning: writing the trace: {e}");
+        }
+        result
+    })
+}
+
+fn cmd_latency(seconds: f64, period: f64, fifo: bool) -> ExitCode {
+    if !(period.is_finite() && period > 0.0 && period <= 1.0) {
+        eprintln!("--period must be a number of seconds in (0, 1], got {period}");
+        return ExitCode::FAILURE;
+    }
+    if !(seconds.is_finite() && seconds > 0.0 && seconds <= 86_400.0) {
+        eprintln!("--seconds must be a number of seconds in (0, 86400], got {seconds}");
+        return ExitCode::FAILURE;
+    }
+    let measured = std::thread::Builder::new()
+        .name("klar-latency".into())
+        .spawn(move || {
+            let status = fifo.then(|| klar::rt::make_realtime(klar::rt::FIFO_PRIORITY));
+            (status, klar::latency::measure(period, seconds))
+        })
+        .map_err(|e| e.to_string())
+        .and_then(|h| {
+            h.join()
+                .map_err(|_| "the measuring thread failed".to_string())
+        });
+    let (status, hist) = match measured {
+        Ok(m) => m,
+        Err(e) => {
+            eprintln!("latency: {e}");
+            return ExitCode::FAILURE;
+        }
+    };
+    match &status {
+        Some(s) if s.fifo.is_ok() => println!("scheduling:   {s}"),
+        Some(s) => {
+            eprintln!("warning: {s}");
+            println!("scheduling:   ordinary (SCHED_FIFO refused)");
+        }
+        None => println!("scheduling:   ordinary (no --fifo)"),
+    }
+    println!("period:       {:.3} ms for {seconds} s", period * 1e3);
+    println!("wake-up lateness, µs (upper bucket edge) and count:");
+    let total = hist.total().max(1) as f64;
+    for (us, count) in hist.rows() {
+        let bar = "#".repeat(((count as f64 / total) * 50.0).ceil() as usize);
+        println!("{us:>9.0} {count:>9} {bar}");
+    }
+    let s = hist.summary();
+    println!("lateness:     {s}");
+    let missed = hist.quantile_ns(1.0) as f64 * 1e-9 > period / 2.0;
+    if missed {
+        println!(
+            "at least one wake-up was more than half a period late: a servo loop at this \
+             period would count underruns"
+        );
+    }
+    ExitCode::SUCCESS
 }
 
 fn cmd_serve(

@@ -29,6 +29,7 @@ mod error;
 mod events;
 pub mod guard;
 mod operator;
+mod pacing;
 mod spindle;
 mod stop;
 pub mod stream;
@@ -43,10 +44,11 @@ pub use error::RunError;
 use klar_interp::{AxisLetter, Op, SourceLoc};
 use klar_motion::{AxisFault, Planner, Sample, Step};
 pub use operator::{OperatorStop, StopLevel};
+use pacing::Pacer;
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 use stop::PendingStop;
 use stream::OpStream;
 
@@ -69,10 +71,15 @@ pub struct RunReport {
     pub cycles: u64,
     /// Largest |following error| per machine axis.
     pub max_following_error: Vec<(AxisLetter, f64)>,
-    /// Cycles whose setpoints reached the axes later than one servo period behind schedule
-    /// (measured on the wall clock in realtime mode; injected `stall` faults in both modes).
+    /// Cycles whose setpoints missed their slot: in realtime mode a cycle that woke more
+    /// than half a servo period after its deadline on the wall clock (or, with an injected
+    /// `stall`, more than a period late); an injected `stall` longer than a period in
+    /// simulated runs.
     pub underruns: u64,
-    /// Seconds spent waiting for the spindle to reach speed.
+    /// Wake-up lateness of the servo cycles on the wall clock (realtime runs).
+    pub lateness: Option<crate::latency::LatenessSummary>,
+    /// Seconds spent waiting for the spindle to reach speed (on the wall clock in realtime
+    /// runs).
     pub spindle_wait: f64,
     /// True when the run used the wall clock.
     pub realtime: bool,
@@ -129,7 +136,10 @@ pub struct Run<'a, 'w> {
     stop_requested: bool,
     trace: Option<TraceWriter<&'w mut dyn Write>>,
     report: RunReport,
-    wall_start: Instant,
+    /// The wall-clock deadlines of a realtime run.
+    pacer: Pacer,
+    /// Lateness of the last wake-up on the wall clock, s, and whether it missed its slot.
+    wall_late: (f64, bool),
     /// Machine time of the last cycle.
     t: f64,
     /// Machine time minus planner time: grows while the run waits (spindle).
@@ -138,6 +148,13 @@ pub struct Run<'a, 'w> {
     line: u32,
     commanded: Vec<f64>,
     actual: Vec<f64>,
+    /// Per machine axis: the command the measured position answers (the one sent a
+    /// feedback lag earlier), for the following-error check.
+    reference: Vec<f64>,
+    /// The commands sent with the last cycle.
+    last_sent: Vec<f64>,
+    /// Per machine axis: cycles its feedback lags behind its setpoints.
+    lags: Vec<u32>,
     warned_no_spindle: bool,
     /// Per machine axis: (in-position window, settle timeout) for positioning-only axes.
     positioning: Vec<Option<(f64, f64)>>,
@@ -172,7 +189,7 @@ impl Run<'_, '_> {
         self.wait_until(t);
         let (wall, injected) = self.lateness(t);
         let late = wall + injected;
-        if late > self.config.servo_period {
+        if self.wall_late.1 || late > self.config.servo_period {
             self.report.underruns += 1;
         }
         // Simulated plants run on machine time and do not mind a late wall clock: on an
@@ -210,7 +227,7 @@ impl Run<'_, '_> {
         }
         for i in 0..self.letters.len() {
             if let Some(limit) = self.fe_limits[i] {
-                let e = self.commanded[i] - self.actual[i];
+                let e = self.reference[i] - self.actual[i];
                 if e.abs() > limit || e.is_nan() {
                     return Err(RunError::Fault {
                         axis: self.letters[i],
@@ -277,14 +294,11 @@ impl Run<'_, '_> {
         }
     }
 
-    /// In realtime mode, sleeps until the cycle due at machine time `t`.
-    fn wait_until(&self, t: f64) {
+    /// In realtime mode, sleeps until the deadline of the cycle due at machine time `t`
+    /// (see [`pacing`]).
+    fn wait_until(&mut self, t: f64) {
         if self.report.realtime {
-            let due = self.wall_start + Duration::from_secs_f64(t);
-            let now = Instant::now();
-            if now < due {
-                std::thread::sleep(due - now);
-            }
+            self.wall_late = self.pacer.wait(t);
         }
     }
 
@@ -292,11 +306,11 @@ impl Run<'_, '_> {
     /// wall-clock delay in realtime mode, and any injected stall that strikes now (which a
     /// realtime run also really waits out).
     fn lateness(&mut self, t: f64) -> (f64, f64) {
-        let mut wall = 0.0;
-        if self.report.realtime {
-            let due = self.wall_start + Duration::from_secs_f64(t);
-            wall = Instant::now().saturating_duration_since(due).as_secs_f64();
-        }
+        let wall = if self.report.realtime {
+            self.wall_late.0
+        } else {
+            0.0
+        };
         let mut late = 0.0;
         while let Some(&(at, seconds)) = self.stalls.front() {
             if at > t {
@@ -305,7 +319,7 @@ impl Run<'_, '_> {
             self.stalls.pop_front();
             if self.report.realtime {
                 std::thread::sleep(Duration::from_secs_f64(seconds));
-                self.wall_start += Duration::from_secs_f64(seconds);
+                self.pacer.delay(seconds);
             }
             late += seconds;
         }
@@ -317,6 +331,15 @@ impl Run<'_, '_> {
         self.t = t;
         self.report.cycles += 1;
         self.report.machine_time = t;
+        for i in 0..self.commanded.len() {
+            let lagging = self.lags.get(i).is_some_and(|&l| l > 0);
+            self.reference[i] = if lagging {
+                self.last_sent[i]
+            } else {
+                self.commanded[i]
+            };
+            self.last_sent[i] = self.commanded[i];
+        }
         for (i, f) in self.io.feedback().iter().enumerate() {
             self.actual[i] = f.position;
             let fe = f.following_error.abs();
@@ -577,6 +600,7 @@ impl<'a, 'w> Run<'a, 'w> {
                 return Err(f);
             }
         }
+        let lags = io.feedback_lags();
         Ok(Run {
             path,
             config,
@@ -591,12 +615,16 @@ impl<'a, 'w> Run<'a, 'w> {
             stop_requested: false,
             trace,
             report,
-            wall_start: Instant::now(),
+            pacer: Pacer::new(config.servo_period),
+            wall_late: (0.0, false),
             t: 0.0,
             shift: 0.0,
             line: 0,
             commanded: at.clone(),
             actual: at.clone(),
+            reference: at.clone(),
+            last_sent: at.clone(),
+            lags,
             warned_no_spindle: false,
             positioning: positioning_axes(config),
             end_windows: crate::testrun::end_windows(config),
@@ -747,6 +775,9 @@ impl<'a, 'w> Run<'a, 'w> {
         self.report.blocks = self.ops.blocks_executed();
         let disabled = self.io.disable();
         self.report.spindle_warning = self.io.spindle_mut().and_then(|s| s.stop_warning());
+        if self.report.realtime {
+            self.report.lateness = Some(self.pacer.histogram.summary());
+        }
         let report = self.report;
         let trace_done = match self.trace {
             Some(t) => t.finish(),

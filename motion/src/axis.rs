@@ -137,6 +137,14 @@ pub trait AxisBackend {
     fn fault_origin(&self, _axis: usize) -> Option<FaultOrigin> {
         None
     }
+
+    /// How many servo cycles the feedback of [`AxisBackend::cycle`] lags behind the
+    /// setpoints handed over with it (1 for a bus exchange that uses the answers to the SYNC
+    /// before); following errors compare the feedback with the setpoints that many cycles
+    /// back.
+    fn feedback_lag(&self) -> u32 {
+        0
+    }
 }
 
 /// The origin of an axis's fault as the backend knows it.

@@ -23,8 +23,9 @@ const REST_BAND: f64 = 1e-3;
 const STOP_TIMEOUT: f64 = 10.0;
 /// Longest the run holds the axes after a stop on the path for them to settle, s.
 const SETTLE_WAIT: f64 = 1.0;
-/// Longest the run waits for faulted axes (whose feedback may be stale or noisy) to show
-/// rest, s: their drives brake on their own.
+/// Shortest time the run waits for faulted axes (whose feedback may be stale or noisy) to
+/// show rest, s: their drives brake on their own. A drive with a configured quick-stop
+/// deceleration is waited for as long as that deceleration needs from its speed.
 const FAULTED_WAIT: f64 = 1.0;
 
 impl Run<'_, '_> {
@@ -202,6 +203,7 @@ impl Run<'_, '_> {
                 AxisStop::new(from, a, j)
             })
             .collect();
+        let faulted_wait = self.faulted_wait(&report.axes, &faulted);
         let mut still = 0;
         let mut still_faulted = 0;
         let mut last = self.actual.clone();
@@ -250,24 +252,52 @@ impl Run<'_, '_> {
             } else {
                 still = 0;
             }
-            let faulted_done = still_faulted >= REST_CYCLES || self.t - t_fault >= FAULTED_WAIT;
+            let faulted_done = still_faulted >= REST_CYCLES || self.t - t_fault >= faulted_wait;
             if still >= REST_CYCLES && faulted_done {
                 break;
             }
         }
         report.t_rest = self.t;
-        for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
-            f.position_at_rest = x;
-        }
         // At rest the drives are switched off: a faulted machine waits powerless for its
         // reset (an axis the monitor tripped may still pull toward an unreachable command).
         if let Err(e) = self.io.disable() {
             tracing::warn!("quick stop: disabling the drives: {e}");
         }
+        if self.report.realtime {
+            // A bus backend switches a braking drive off only at its standstill, which can
+            // come after the loop above took late (unchanged) answers for rest: one more
+            // cycle reads where the drives came to rest.
+            let t = self.t + period;
+            self.wait_until(t);
+            if self.io.cycle(t).is_ok() {
+                for (a, f) in self.actual.iter_mut().zip(self.io.feedback()) {
+                    *a = f.position;
+                }
+            }
+        }
+        for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
+            f.position_at_rest = x;
+        }
         tracing::warn!("{report}");
         self.report.stop = Some(report.clone());
         self.stop_report = Some(report);
         error
+    }
+
+    /// How long (s) the quick stop waits at most for the faulted axes to come to rest:
+    /// [`FAULTED_WAIT`], or longer where a drive's quick-stop deceleration needs longer from
+    /// the axis's speed at the fault (with half again as margin).
+    fn faulted_wait(&self, figures: &[AxisStopFigures], faulted: &[bool]) -> f64 {
+        let mut wait = FAULTED_WAIT;
+        for ((axis, f), &is_faulted) in self.config.axes.iter().zip(figures).zip(faulted) {
+            let crate::config::BackendConfig::Canopen(c) = &axis.backend else {
+                continue;
+            };
+            if let (true, Some(a)) = (is_faulted, c.drive.quick_stop_deceleration) {
+                wait = wait.max(1.5 * f.velocity.abs() / a + 0.1);
+            }
+        }
+        wait.min(STOP_TIMEOUT)
     }
 
     /// After a stop: clears the faults of every faulted axis (their causes must be gone),
@@ -297,6 +327,7 @@ impl Run<'_, '_> {
         }
         self.io.hold();
         self.shift += period;
+        self.wait_until(self.t + period);
         self.io.cycle(self.t + period)?;
         self.record_cycle(self.t + period)?;
         // The position the drives report becomes the command, then the axes are enabled
@@ -312,6 +343,7 @@ impl Run<'_, '_> {
         self.commanded.clone_from(&measured);
         self.io.enable()?;
         self.shift += period;
+        self.wait_until(self.t + period);
         self.io.cycle(self.t + period)?;
         self.record_cycle(self.t + period)?;
         if let Some(i) = self.faulted_axis() {

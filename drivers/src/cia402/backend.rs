@@ -24,6 +24,7 @@
 //! timeout). A fault of any drive stops every drive (see [`super::network`]).
 
 use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant};
 
 use klar_motion::{
     AxisBackend, AxisFault, AxisFeedback, AxisState, BackendError, FaultOrigin, Setpoint,
@@ -55,7 +56,18 @@ impl Cia402Backend {
     /// A simulated bus is built by `klar_sim::cia402::simulated_backend` instead.
     pub fn open(config: &CanOpenConfig, servo_period: f64) -> Result<Self, Cia402Error> {
         let bus = open_bus(config)?;
-        Self::with_bus(config, servo_period, bus)
+        let backend = Self::with_bus(config, servo_period, bus)?;
+        backend.set_paced(true);
+        lock(&backend.net).check_round_trip()?;
+        Ok(backend)
+    }
+
+    /// Paces the exchanges outside the servo loop (enable, disable, fault reset, the wait
+    /// for a quick stop) on the wall clock, one servo period apart: on for a real bus
+    /// ([`Cia402Backend::open`]), off for buses built with [`Cia402Backend::with_bus`]
+    /// until set here.
+    pub fn set_paced(&self, paced: bool) {
+        lock(&self.net).paced = paced;
     }
 
     /// Starts the drives of `config` on `bus` with SYNC every `servo_period` seconds.
@@ -106,7 +118,72 @@ impl Cia402Backend {
     }
 }
 
+/// Exchanges timed at start-up to measure the round trip through the adapter.
+const ROUND_TRIP_SAMPLES: usize = 11;
+/// The share of the servo period the round trip may take: pipelined, the answers must be
+/// in before the next SYNC (a late one is waited for a quarter period); waiting for them,
+/// the cycle's own work must fit as well.
+const ROUND_TRIP_SHARE_PIPELINED: f64 = 1.0;
+const ROUND_TRIP_SHARE_WAITING: f64 = 0.5;
+
 impl Network {
+    /// Times [`ROUND_TRIP_SAMPLES`] paced exchanges (SYNC to the last transmit PDO) and
+    /// refuses a servo period even the fastest of them does not fit (the adapter and the
+    /// drives can never answer in time), naming one that would; a median beyond it (a busy
+    /// computer or bus) is a warning. Returns the median.
+    pub(crate) fn check_round_trip(&mut self) -> Result<f64, Cia402Error> {
+        let mut samples = Vec::with_capacity(ROUND_TRIP_SAMPLES);
+        for _ in 0..ROUND_TRIP_SAMPLES {
+            for d in self.drives.iter_mut() {
+                d.target = d.hold_target();
+            }
+            self.pace();
+            self.exchange();
+            self.handle_events();
+            if let Some(rt) = self.round_trip {
+                samples.push(rt);
+            }
+        }
+        samples.sort_by(f64::total_cmp);
+        let (Some(&fastest), Some(&median)) = (samples.first(), samples.get(samples.len() / 2))
+        else {
+            return Err(Cia402Error::Config(
+                "no exchange got every transmit PDO back while timing the round trip".into(),
+            ));
+        };
+        let share = if self.pipelined() {
+            ROUND_TRIP_SHARE_PIPELINED
+        } else {
+            ROUND_TRIP_SHARE_WAITING
+        };
+        tracing::info!(
+            fastest_ms = fastest * 1e3,
+            median_ms = median * 1e3,
+            "SYNC to transmit PDO round trip through the adapter"
+        );
+        if fastest > share * self.servo_period {
+            let fits = (fastest / share / 0.000_25).ceil() * 0.25;
+            return Err(Cia402Error::Config(format!(
+                "the round trip SYNC → transmit PDOs through the adapter takes at least \
+                 {:.2} ms, more than {:.0} % of the {} ms servo period; a servo period of \
+                 {fits} ms or longer would fit",
+                fastest * 1e3,
+                share * 100.0,
+                self.servo_period * 1e3
+            )));
+        }
+        if median > share * self.servo_period {
+            tracing::warn!(
+                "the round trip SYNC → transmit PDOs takes {:.2} ms (median), more than \
+                 {:.0} % of the {} ms servo period: expect late answers",
+                median * 1e3,
+                share * 100.0,
+                self.servo_period * 1e3
+            );
+        }
+        Ok(median)
+    }
+
     fn enable_axes(&mut self) -> Result<(), BackendError> {
         if let Some(stop) = &self.stop {
             return Err(BackendError::InvalidState(format!(
@@ -143,6 +220,8 @@ impl Network {
     }
 
     fn disable_axes(&mut self) -> Result<(), BackendError> {
+        // A drive in QUICK STOP ACTIVE is still braking: voltage goes off at standstill.
+        self.wait_quick_stops();
         self.drive_sequence(
             None,
             |d| match d.power() {
@@ -254,9 +333,30 @@ impl Network {
 
     /// One servo cycle at `t`: axis setpoints (one per axis) and the spindle command go
     /// out, feedback comes in.
+    ///
+    /// Pipelined ([`Network::pipelined`]): the transmit PDOs answering the last SYNC are
+    /// collected and evaluated first (they had a servo period to arrive), then this cycle's
+    /// receive PDOs and SYNC go out without waiting for their answers.
     pub(crate) fn cycle(&mut self, t: f64, setpoints: &[Setpoint]) {
         self.master.set_time(t);
-        if let Err(e) = self.master.poll() {
+        let pipelined = self.pipelined();
+        if pipelined {
+            // The answers had a servo period to arrive: a late one is not waited for beyond
+            // a quarter period (the cycle must keep its deadline); it counts as missing.
+            let grace = Duration::from_secs_f64(self.servo_period / 4.0);
+            let wait = self.last_sync.map_or(Duration::ZERO, |s| {
+                (s + self.pdo_wait)
+                    .saturating_duration_since(Instant::now())
+                    .min(grace)
+            });
+            self.collect(wait);
+            self.handle_events();
+            self.evaluate();
+            self.apply_stop();
+            for d in self.drives.iter_mut() {
+                d.answered = d.commanded;
+            }
+        } else if let Err(e) = self.master.poll() {
             self.stop_all(
                 None,
                 AxisFault::CommunicationLost,
@@ -364,10 +464,19 @@ impl Network {
             );
         }
         self.apply_stop();
+        if pipelined {
+            self.send_cyclic();
+            self.handle_events();
+            self.apply_stop();
+            return;
+        }
         self.exchange();
         self.handle_events();
         self.evaluate();
         self.apply_stop();
+        for d in self.drives.iter_mut() {
+            d.answered = d.commanded;
+        }
     }
 }
 
@@ -397,6 +506,11 @@ fn profile_setpoint(d: &mut super::network::Drive, wanted: i32) {
 impl AxisBackend for Cia402Backend {
     fn axis_count(&self) -> usize {
         lock(&self.net).axes
+    }
+
+    /// 1 when the exchange is pipelined (the positions answer the SYNC before), else 0.
+    fn feedback_lag(&self) -> u32 {
+        u32::from(lock(&self.net).pipelined())
     }
 
     fn enable(&mut self) -> Result<(), BackendError> {
@@ -437,7 +551,7 @@ impl AxisBackend for Cia402Backend {
         for (d, fb) in net.drives.iter().zip(feedback.iter_mut()) {
             let position = d.scaling.to_units(d.actual);
             fb.position = position;
-            fb.following_error = d.commanded - position;
+            fb.following_error = d.answered - position;
             fb.homed = d.homed;
             fb.fault = d.fault.clone();
             fb.state = if d.fault.is_some() || d.power().is_fault() {

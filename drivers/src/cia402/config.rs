@@ -129,6 +129,13 @@ pub struct DriveConfig {
     /// (0x6083, 0x6084), mm/s² or degrees/s².
     #[serde(default)]
     pub profile_acceleration: Option<f64>,
+    /// Quick-stop deceleration, mm/s² or degrees/s²: written at start-up as object 0x6085
+    /// together with quick stop option code 6 (0x605A: brake on this ramp and stay in QUICK
+    /// STOP ACTIVE), so that after a quick stop klar switches the drive off only once it
+    /// stands still, or after the time this deceleration needs from the drive's speed.
+    /// Unset: the drive keeps its own values.
+    #[serde(default)]
+    pub quick_stop_deceleration: Option<f64>,
     /// Receive PDO number used for controlword, target position and mode (1..=4).
     #[serde(default = "default_pdo_number")]
     pub rpdo: u16,
@@ -190,6 +197,14 @@ impl DriveConfig {
     /// that part). The message names the node.
     pub fn check(&self, servo_period: Option<f64>) -> Result<(), String> {
         let node = self.node;
+        if let Some(a) = self.quick_stop_deceleration
+            && !(a.is_finite() && a > 0.0)
+        {
+            return Err(format!(
+                "node {node}: quick_stop_deceleration must be a positive number (units/s²), \
+                 got {a}"
+            ));
+        }
         match self.mode {
             AxisMode::Pv => {
                 return Err(format!(

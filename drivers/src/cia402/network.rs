@@ -164,7 +164,22 @@ pub(crate) struct Drive {
     /// Spindle: exchanges since the target last changed (a "target reached" bit counts
     /// only once the drive has seen the target for a full cycle).
     pub(crate) same_target: u32,
+    /// Axis: the configured quick-stop deceleration (0x6085), units/s².
+    pub(crate) quick_stop_deceleration: Option<f64>,
+    /// Consecutive transmit PDOs whose actual value moved by at most [`STILL_COUNTS`].
+    pub(crate) still_for: u32,
+    /// Axis: speed between the last two transmit PDOs, units/s (a spindle: unused).
+    pub(crate) speed: f64,
+    /// Axis: the position command the last actual position answers (the one sent with its
+    /// SYNC), units: the reference of the reported following error.
+    pub(crate) answered: f64,
 }
+
+/// Largest change of the actual position between two SYNCs (counts) that still counts as
+/// standing still: an encoder dithering by a count at rest.
+pub(crate) const STILL_COUNTS: i64 = 1;
+/// Transmit PDOs in a row without motion that make a standstill.
+pub(crate) const STILL_PDOS: u32 = 3;
 
 impl Drive {
     pub(crate) fn power(&self) -> PowerState {
@@ -184,6 +199,22 @@ impl Drive {
             self.actual
         }
     }
+
+    /// True when the drive stands still: its position has not moved for [`STILL_PDOS`]
+    /// transmit PDOs, or (in QUICK STOP ACTIVE) it reports the quick stop done (bit 10).
+    pub(crate) fn at_standstill(&self) -> bool {
+        self.still_for >= STILL_PDOS
+            || (self.power() == PowerState::QuickStopActive && self.status & SW_TARGET_REACHED != 0)
+    }
+
+    /// Longest a quick stop of this drive can still take from its present speed: the time
+    /// its quick-stop deceleration needs, with half again as margin and a tenth of a
+    /// second for the drive's reaction; `None` without a configured deceleration.
+    pub(crate) fn quick_stop_bound(&self) -> Option<Duration> {
+        let a = self.quick_stop_deceleration?;
+        let t = 1.5 * self.speed.abs() / a + 0.1;
+        Some(Duration::from_secs_f64(t.clamp(0.0, 60.0)))
+    }
 }
 
 /// The drives on one CANopen bus: the axes first (in axis order), then the spindle.
@@ -202,6 +233,14 @@ pub(crate) struct Network {
     pub(crate) spindle_ramp_step: f64,
     /// The servo period (SYNC interval), seconds.
     pub(crate) servo_period: f64,
+    /// Exchanges outside the servo loop (enable, disable, fault reset) keep one servo
+    /// period between SYNCs on the wall clock (real buses; simulated ones run unpaced).
+    pub(crate) paced: bool,
+    /// When the last SYNC went out.
+    pub(crate) last_sync: Option<Instant>,
+    /// The time from the last SYNC to its last transmit PDO, s (the adapter's round trip
+    /// plus the drives' reaction), when every drive answered.
+    pub(crate) round_trip: Option<f64>,
 }
 
 impl Network {
@@ -302,6 +341,25 @@ impl Network {
 
     /// Sends every receive PDO and SYNC, then collects the transmit PDOs.
     pub(crate) fn exchange(&mut self) {
+        if self.send_cyclic() {
+            self.collect(self.pdo_wait);
+        }
+    }
+
+    /// True when the servo cycle runs pipelined: each cycle uses the transmit PDOs of the
+    /// SYNC before and sends its setpoints with a new SYNC without waiting for the answers.
+    /// Paced (real) buses whose axes all run in CSP or profile position do; a CSV axis, whose
+    /// position loop klar closes, keeps the exchange that waits for the answers.
+    pub(crate) fn pipelined(&self) -> bool {
+        self.paced
+            && self
+                .drives
+                .iter()
+                .all(|d| d.kind == DriveKind::Spindle || d.mode != MODE_CSV)
+    }
+
+    /// Sends every receive PDO and SYNC; false when sending failed (every drive stopped).
+    pub(crate) fn send_cyclic(&mut self) -> bool {
         for i in 0..self.drives.len() {
             let Some(d) = self.drives.get(i) else {
                 continue;
@@ -318,19 +376,31 @@ impl Network {
                     AxisFault::CommunicationLost,
                     format!("node {node}: send failed: {e}"),
                 );
-                return;
+                return false;
             }
         }
-        if let Err(e) = self.master.sync() {
+        let sent = self.master.sync();
+        self.last_sync = Some(Instant::now());
+        if let Err(e) = sent {
             self.stop_all(
                 None,
                 AxisFault::CommunicationLost,
                 format!("SYNC not sent: {e}"),
             );
-            return;
+            return false;
         }
+        true
+    }
+
+    /// Collects the transmit PDOs answering the last SYNC, waiting up to `wait` for them.
+    pub(crate) fn collect(&mut self, wait: Duration) {
         let cobs: Vec<u16> = self.drives.iter().map(|d| d.tpdo_cob).collect();
-        if let Err(e) = self.master.await_pdos(&cobs, self.pdo_wait) {
+        let answered = self.master.await_pdos(&cobs, wait);
+        self.round_trip = self
+            .last_sync
+            .filter(|_| answered.as_ref().is_ok_and(Vec::is_empty))
+            .map(|sync| sync.elapsed().as_secs_f64());
+        if let Err(e) = answered {
             self.stop_all(
                 None,
                 AxisFault::CommunicationLost,
@@ -366,8 +436,19 @@ impl Network {
                     Some(v) => {
                         if let (Some(d), [status, actual]) = (self.drives.get_mut(i), v.as_slice())
                         {
+                            let actual = *actual as i32;
+                            let moved = i64::from(actual) - i64::from(d.actual);
+                            d.still_for = if d.seen && moved.abs() <= STILL_COUNTS {
+                                d.still_for.saturating_add(1)
+                            } else {
+                                0
+                            };
+                            if d.seen && d.kind == DriveKind::Axis {
+                                d.speed = d.scaling.to_units(actual) - d.scaling.to_units(d.actual);
+                                d.speed /= self.servo_period;
+                            }
                             d.status = *status as u16;
-                            d.actual = *actual as i32;
+                            d.actual = actual;
                             d.seen = true;
                             d.missed = 0;
                         }
@@ -388,6 +469,8 @@ impl Network {
     /// Turns statusword bits into faults and follows homing.
     pub(crate) fn evaluate(&mut self) {
         let mut finished_homing = Vec::new();
+        // Answers that may still predate the homing start bit.
+        let lag = u32::from(self.pipelined());
         for i in 0..self.drives.len() {
             let Some(d) = self.drives.get_mut(i) else {
                 continue;
@@ -458,7 +541,7 @@ impl Network {
                                 },
                                 format!("node {node}: homing error"),
                             ));
-                        } else if answers > 0
+                        } else if answers > lag
                             && d.status & SW_OMS1 != 0
                             && d.status & SW_TARGET_REACHED != 0
                         {
@@ -599,7 +682,69 @@ impl Network {
                     d.target = d.hold_target();
                 }
             }
+            self.pace();
             self.exchange();
+        }
+    }
+
+    /// On a paced network, sleeps until one servo period after the last SYNC.
+    pub(crate) fn pace(&self) {
+        if !self.paced {
+            return;
+        }
+        if let Some(last) = self.last_sync {
+            let due = last + Duration::from_secs_f64(self.servo_period);
+            let now = Instant::now();
+            if due > now {
+                std::thread::sleep(due - now);
+            }
+        }
+    }
+
+    /// Holds every axis drive in QUICK STOP ACTIVE (exchanging once per servo period) until
+    /// it stands still, or for at most the time its quick-stop deceleration needs from its
+    /// present speed (the state timeout without a configured deceleration). Drives still
+    /// moving at the bound are named in a warning.
+    pub(crate) fn wait_quick_stops(&mut self) {
+        let start = Instant::now();
+        let bounds: Vec<Duration> = self
+            .drives
+            .iter()
+            .map(|d| d.quick_stop_bound().unwrap_or(self.state_timeout))
+            .collect();
+        loop {
+            let elapsed = start.elapsed();
+            let mut waiting = false;
+            for (d, bound) in self.drives.iter().zip(&bounds) {
+                if d.kind != DriveKind::Axis
+                    || d.power() != PowerState::QuickStopActive
+                    || d.at_standstill()
+                {
+                    continue;
+                }
+                if elapsed < *bound {
+                    waiting = true;
+                } else if d.still_for == 0 {
+                    tracing::warn!(
+                        node = d.node,
+                        speed = d.speed,
+                        "still moving {:.3} s after the quick stop began; switched off",
+                        elapsed.as_secs_f64()
+                    );
+                }
+            }
+            if !waiting {
+                return;
+            }
+            for d in self.drives.iter_mut() {
+                if d.kind == DriveKind::Axis && d.power() == PowerState::QuickStopActive {
+                    d.controlword = CW_QUICK_STOP;
+                    d.target = d.hold_target();
+                }
+            }
+            self.pace();
+            self.exchange();
+            self.handle_events();
         }
     }
 }

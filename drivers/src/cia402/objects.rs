@@ -6,6 +6,9 @@ pub const CONTROLWORD: u16 = 0x6040;
 pub const STATUSWORD: u16 = 0x6041;
 /// Quick stop option code (i16).
 pub const QUICK_STOP_OPTION: u16 = 0x605A;
+/// Quick stop option code 6: brake on the quick-stop deceleration (0x6085) and stay in
+/// QUICK STOP ACTIVE (the master switches the drive off once it stands still).
+pub const QUICK_STOP_HOLD_OPTION: i16 = 6;
 /// Modes of operation (i8).
 pub const MODES_OF_OPERATION: u16 = 0x6060;
 /// Modes of operation display (i8).

@@ -143,6 +143,9 @@ impl Network {
             heartbeat_timeout,
             stop: None,
             servo_period,
+            paced: false,
+            last_sync: None,
+            round_trip: None,
         };
         backend.first_exchange(Duration::from_millis(config.tpdo_timeout_ms))?;
         for d in backend.drives.iter_mut() {
@@ -227,6 +230,7 @@ fn new_drive(cfg: &DriveConfig) -> Result<Drive, Cia402Error> {
     drive.position_gain = cfg.gain();
     drive.following_window = cfg.following_error_window.map(f64::abs);
     drive.homed = cfg.absolute_encoder;
+    drive.quick_stop_deceleration = cfg.quick_stop_deceleration;
     Ok(drive)
 }
 
@@ -294,6 +298,10 @@ fn make_drive(
         position_gain: 0.0,
         following_window: None,
         same_target: 0,
+        quick_stop_deceleration: None,
+        still_for: 0,
+        speed: 0.0,
+        answered: 0.0,
     })
 }
 
@@ -387,6 +395,20 @@ fn configure_drive(
             FOLLOWING_ERROR_WINDOW,
             0,
             &d.scaling.magnitude_counts(w).to_le_bytes(),
+        )?;
+    }
+    if let Some(a) = cfg.and_then(|c| c.quick_stop_deceleration) {
+        master.sdo_write(
+            node,
+            QUICK_STOP_DECELERATION,
+            0,
+            &d.scaling.magnitude_counts(a).to_le_bytes(),
+        )?;
+        master.sdo_write(
+            node,
+            QUICK_STOP_OPTION,
+            0,
+            &QUICK_STOP_HOLD_OPTION.to_le_bytes(),
         )?;
     }
     if let Some(v) = cfg.and_then(|c| c.profile_velocity) {
