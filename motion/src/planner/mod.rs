@@ -26,6 +26,7 @@
 //! step onto the point).
 
 mod commit;
+mod cruise;
 mod deep;
 mod drops;
 pub mod path;
@@ -164,6 +165,8 @@ pub struct Planner {
     compensation_feed: Option<f64>,
     /// The table axes of a table-table machine, for the limits of turning moves with TCPM.
     table: Option<TableGeometry>,
+    /// Where the state may cruise on without the speed generator.
+    cruise: cruise::Cruising,
 }
 
 impl Planner {
@@ -223,6 +226,7 @@ impl Planner {
             tcpm: false,
             compensation_feed: None,
             table: None,
+            cruise: cruise::Cruising::default(),
         })
     }
 
@@ -681,8 +685,20 @@ impl Planner {
 
     /// Moves the path state on by one period and samples it at time `t`.
     fn advance(&mut self, t: f64) -> Sample {
+        let next = match self.cruise_step() {
+            Some(next) => next,
+            None => self.generate(),
+        };
+        self.state = next;
+        self.reached = next.s;
+        self.sample_at(t, next)
+    }
+
+    /// The next state from the speed generator.
+    fn generate(&mut self) -> Motion {
         self.scan();
         let target = self.go_target();
+        let before = self.state;
         let mut next = speed::advance(&self.state, target, &self.window, self.config.period);
         // Never past the end of the committed path or the next stop.
         let stop = self.next_stop();
@@ -713,8 +729,12 @@ impl Planner {
                 a: 0.0,
             };
         }
-        self.state = next;
-        self.reached = next.s;
+        self.find_cruise(&before, &next, target);
+        next
+    }
+
+    /// Moves past the pieces behind `next` and samples it at time `t`.
+    fn sample_at(&mut self, t: f64, next: Motion) -> Sample {
         while self.pieces.len() > 1 && self.pieces.front().is_some_and(|p| p.end() < next.s) {
             if let Some(p) = self.pieces.pop_front() {
                 self.rest_pose = p.point(p.end()).pose;
