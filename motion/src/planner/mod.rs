@@ -26,6 +26,7 @@
 //! step onto the point).
 
 mod commit;
+use commit::{path_feed, piece_error};
 mod cruise;
 mod deep;
 mod drops;
@@ -44,8 +45,8 @@ use crate::error::MotionError;
 use crate::geom::{Arc, AxisBounds, GeomError, Line, Poly, Segment, finite_pose, letter};
 use crate::limits::Headroom;
 use crate::profile::Ramp;
-use klar_interp::{AxisLetter, Feed, Op, OpKind, Pose, SourceLoc};
-use path::{Element, MAX_OVERRIDE, Piece, PieceError, Shape, Waiting, piece_limits};
+use klar_interp::{AxisLetter, Op, OpKind, Pose, SourceLoc};
+use path::{Element, MAX_OVERRIDE, Piece, Shape, Waiting, piece_limits};
 use speed::{Motion, Window};
 use std::collections::VecDeque;
 
@@ -789,22 +790,5 @@ impl Planner {
             }
         }
         Ok(())
-    }
-}
-
-fn piece_error(e: PieceError, loc: SourceLoc) -> MotionError {
-    match e {
-        PieceError::Absent(axis) => MotionError::AbsentAxis { loc, axis },
-        PieceError::Unplannable => MotionError::Unplannable { loc },
-    }
-}
-
-/// The path speed limit of a feed: `None` for rapid traverse.
-fn path_feed(feed: Feed, loc: SourceLoc) -> Result<Option<f64>, MotionError> {
-    match feed {
-        Feed::Rapid => Ok(None),
-        Feed::Rate(f) if f.is_finite() && f > 0.0 => Ok(Some(f)),
-        Feed::Rate(f) => Err(MotionError::BadFeed { loc, feed: f }),
-        Feed::PerRevolution(_) => Err(MotionError::NeedsSpindle { loc }),
     }
 }
