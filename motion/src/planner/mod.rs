@@ -168,6 +168,8 @@ pub struct Planner {
     table: Option<TableGeometry>,
     /// Where the state may cruise on without the speed generator.
     cruise: cruise::Cruising,
+    /// The last window's limits before and after the backward pass.
+    settled: scan::SettleMemo,
 }
 
 impl Planner {
@@ -228,6 +230,7 @@ impl Planner {
             compensation_feed: None,
             table: None,
             cruise: cruise::Cruising::default(),
+            settled: scan::SettleMemo::default(),
         })
     }
 

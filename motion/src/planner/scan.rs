@@ -196,6 +196,31 @@ impl Planner {
                 soft: false,
             });
         }
-        speed::settle(&mut w.limits);
+        self.settled.settle(&mut w.limits);
+    }
+}
+
+/// The limits of the last window before and after [`speed::settle`]. The window is scanned
+/// every period, but its limits change only where a piece enters or leaves it: the backward
+/// pass of an unchanged list gives the same result, so it is taken from here instead.
+#[derive(Debug, Clone, Default)]
+pub(super) struct SettleMemo {
+    /// The limits as the last scan collected them.
+    raw: Vec<Limit>,
+    /// The same after the backward pass.
+    settled: Vec<Limit>,
+}
+
+impl SettleMemo {
+    /// Settles `limits` (see [`speed::settle`]), reusing the last result when the list is
+    /// the same as last time.
+    fn settle(&mut self, limits: &mut Vec<Limit>) {
+        if *limits == self.raw {
+            limits.clone_from(&self.settled);
+            return;
+        }
+        self.raw.clone_from(limits);
+        speed::settle(limits);
+        self.settled.clone_from(limits);
     }
 }
