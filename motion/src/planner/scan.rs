@@ -224,3 +224,38 @@ impl SettleMemo {
         self.settled.clone_from(limits);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The backward pass on its own.
+    fn settled(limits: &[Limit]) -> Vec<Limit> {
+        let mut l = limits.to_vec();
+        speed::settle(&mut l);
+        l
+    }
+
+    #[test]
+    fn the_memo_settles_as_the_backward_pass_does_whether_the_window_changed_or_not() {
+        // Three windows in a row: 30 mm/s then a stop 0.4 mm ahead (the backward pass lowers
+        // the first), the same again, then one whose stop has moved on.
+        let first = vec![
+            Limit::uniform(0.0, 50.0, 1000.0, 1e5, true),
+            Limit::uniform(0.2, 30.0, 1000.0, 1e5, false),
+            Limit::uniform(0.6, 0.0, 1000.0, 1e5, false),
+        ];
+        let mut moved = first.clone();
+        moved[2].at = 5.0;
+        let mut memo = SettleMemo::default();
+        for raw in [&first, &first, &moved, &first] {
+            let mut l = raw.clone();
+            memo.settle(&mut l);
+            assert_eq!(l, settled(raw));
+        }
+        // The pass did lower the 30 mm/s limit before the near stop, and not before the far
+        // one: the windows really settle differently.
+        assert!(settled(&first)[1].speed < 30.0);
+        assert_eq!(settled(&moved)[1].speed, 30.0);
+    }
+}
