@@ -281,6 +281,55 @@ impl Ramp {
         self.target
     }
 
+    /// True when [`Ramp::speed_after`] of `distance` is at most `bound`, found with as few
+    /// bisection steps as decide it: the bisection's answer is the speed at some time in the
+    /// bracket, so once every speed in the bracket (the ends and the turning point of the
+    /// quadratic between them) is clearly on one side of `bound` the answer is too. Where
+    /// the bracket never decides (the speed within rounding of `bound`), the full
+    /// bisection's speed is compared, as `speed_after` gives it.
+    pub fn speed_after_at_most(&self, distance: f64, bound: f64) -> bool {
+        let (mut s, mut v, mut a) = (0.0, self.v0, self.a0);
+        for &(j, d) in &self.phases {
+            if d <= 0.0 {
+                continue;
+            }
+            let at = |h: f64| s + v * h + 0.5 * a * h * h + j * h * h * h / 6.0;
+            if at(d) >= distance {
+                let speed = |h: f64| v + a * h + 0.5 * j * h * h;
+                let margin = DECIDE_MARGIN * (v.abs() + bound.abs() + a.abs() * d);
+                let (mut lo, mut hi) = (0.0, d);
+                for _ in 0..SPEED_AFTER_STEPS {
+                    let (u, w) = (speed(lo), speed(hi));
+                    let (mut low, mut high) = (u.min(w), u.max(w));
+                    if j != 0.0 {
+                        let turn = -a / j;
+                        if turn > lo && turn < hi {
+                            low = low.min(speed(turn));
+                            high = high.max(speed(turn));
+                        }
+                    }
+                    if high <= bound - margin {
+                        return true;
+                    }
+                    if low > bound + margin {
+                        return false;
+                    }
+                    let mid = 0.5 * (lo + hi);
+                    if at(mid) < distance {
+                        lo = mid;
+                    } else {
+                        hi = mid;
+                    }
+                }
+                return speed(lo) <= bound;
+            }
+            s = at(d);
+            v += a * d + 0.5 * j * d * d;
+            a += j * d;
+        }
+        self.target <= bound
+    }
+
     /// State `t ≥ 0` seconds after the start; cruise at the target after the ramp.
     pub fn state(&self, t: f64) -> RampState {
         let (mut s, mut v, mut a) = (0.0, self.v0, self.a0);
@@ -308,6 +357,11 @@ impl Ramp {
 /// Bisection steps in [`Ramp::speed_after`]: a phase lasts at most a few tenths of a second
 /// at the speeds and limits of a machine, so 2⁻²⁴ of it is below 0.1 µs.
 const SPEED_AFTER_STEPS: usize = 24;
+
+/// Relative margin (of the speeds involved) by which the speeds in a bracket must clear the
+/// bound before [`Ramp::speed_after_at_most`] decides from them: far above the rounding of
+/// evaluating the speed at a time, so the early answer is the full bisection's.
+const DECIDE_MARGIN: f64 = 1e-12;
 
 /// Phases raising the speed by `dv` from acceleration `a0`, where `dv ≥ a0·|a0|/(2J)`.
 fn speed_up(dv: f64, a0: f64, accel: f64, jerk: f64) -> [(f64, f64); 3] {
@@ -370,5 +424,34 @@ mod tests {
             let v = r.speed_after(d);
             assert!((v - want).abs() < 1e-5, "{d}: {v} against {want}");
         }
+    }
+
+    #[test]
+    fn deciding_the_speed_after_a_distance_agrees_with_the_full_bisection() {
+        // Braking, speeding up and easing ramps; distances inside every phase and beyond
+        // the end; bounds across the speed range, and the full bisection's answer itself
+        // with the neighbouring floats.
+        let ramps = [
+            Ramp::new(40.0, -300.0, 10.0, 800.0, 2e4),
+            Ramp::new(40.0, -800.0, 10.0, 800.0, 1e5),
+            Ramp::new(0.0, 0.0, 50.0, 1000.0, 1e5),
+            Ramp::new(12.0, 400.0, 3.0, 1000.0, 5e4),
+            Ramp::new(25.0, 0.0, 24.9, 500.0, 1e5),
+        ];
+        let mut decided = 0;
+        for r in ramps {
+            let total = r.distance();
+            for k in 0..=60 {
+                let d = total * f64::from(k) / 50.0;
+                let v = r.speed_after(d);
+                let mut bounds = vec![v, v.next_up(), v.next_down(), 0.0, 60.0];
+                bounds.extend((0..=40).map(|i| 1.25 * f64::from(i)));
+                for b in bounds {
+                    assert_eq!(r.speed_after_at_most(d, b), v <= b, "{r:?} {d} {b}");
+                    decided += 1;
+                }
+            }
+        }
+        assert!(decided > 10_000);
     }
 }

@@ -2,11 +2,13 @@
 //! decided, the vertices of the polyline around it, and the pieces, stops and events the
 //! commit produces.
 
+use super::path::PieceError;
 use super::path::{Committed, Element, NewPiece, Piece, Shape, Vertices, commit, piece_limits};
-use super::{Marker, Planner, deep, path, piece_error, run, smooth, speed};
+use super::{Marker, Planner, deep, path, run, smooth, speed};
 use crate::error::MotionError;
 use crate::geom::Metric;
 use crate::limits::Headroom;
+use klar_interp::{Feed, SourceLoc};
 
 /// Elements kept back at most: more wait while the lines after the next corner but one
 /// are shorter than a run of dense code and the split-point fit at its end reach
@@ -292,6 +294,24 @@ impl Planner {
             op: None,
             dwell: 0.0,
         });
+    }
+}
+
+/// The error for a piece that cannot be planned, at the block it comes from.
+pub(super) fn piece_error(e: PieceError, loc: SourceLoc) -> MotionError {
+    match e {
+        PieceError::Absent(axis) => MotionError::AbsentAxis { loc, axis },
+        PieceError::Unplannable => MotionError::Unplannable { loc },
+    }
+}
+
+/// The path speed limit of a feed: `None` for rapid traverse.
+pub(super) fn path_feed(feed: Feed, loc: SourceLoc) -> Result<Option<f64>, MotionError> {
+    match feed {
+        Feed::Rapid => Ok(None),
+        Feed::Rate(f) if f.is_finite() && f > 0.0 => Ok(Some(f)),
+        Feed::Rate(f) => Err(MotionError::BadFeed { loc, feed: f }),
+        Feed::PerRevolution(_) => Err(MotionError::NeedsSpindle { loc }),
     }
 }
 

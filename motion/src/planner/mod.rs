@@ -26,6 +26,8 @@
 //! step onto the point).
 
 mod commit;
+use commit::{path_feed, piece_error};
+mod cruise;
 mod deep;
 mod drops;
 pub mod path;
@@ -43,8 +45,8 @@ use crate::error::MotionError;
 use crate::geom::{Arc, AxisBounds, GeomError, Line, Poly, Segment, finite_pose, letter};
 use crate::limits::Headroom;
 use crate::profile::Ramp;
-use klar_interp::{AxisLetter, Feed, Op, OpKind, Pose, SourceLoc};
-use path::{Element, MAX_OVERRIDE, Piece, PieceError, Shape, Waiting, piece_limits};
+use klar_interp::{AxisLetter, Op, OpKind, Pose, SourceLoc};
+use path::{Element, MAX_OVERRIDE, Piece, Shape, Waiting, piece_limits};
 use speed::{Motion, Window};
 use std::collections::VecDeque;
 
@@ -164,6 +166,10 @@ pub struct Planner {
     compensation_feed: Option<f64>,
     /// The table axes of a table-table machine, for the limits of turning moves with TCPM.
     table: Option<TableGeometry>,
+    /// Where the state may cruise on without the speed generator.
+    cruise: cruise::Cruising,
+    /// The last window's limits before and after the backward pass.
+    settled: scan::SettleMemo,
 }
 
 impl Planner {
@@ -223,6 +229,8 @@ impl Planner {
             tcpm: false,
             compensation_feed: None,
             table: None,
+            cruise: cruise::Cruising::default(),
+            settled: scan::SettleMemo::default(),
         })
     }
 
@@ -681,8 +689,20 @@ impl Planner {
 
     /// Moves the path state on by one period and samples it at time `t`.
     fn advance(&mut self, t: f64) -> Sample {
+        let next = match self.cruise_step() {
+            Some(next) => next,
+            None => self.generate(),
+        };
+        self.state = next;
+        self.reached = next.s;
+        self.sample_at(t, next)
+    }
+
+    /// The next state from the speed generator.
+    fn generate(&mut self) -> Motion {
         self.scan();
         let target = self.go_target();
+        let before = self.state;
         let mut next = speed::advance(&self.state, target, &self.window, self.config.period);
         // Never past the end of the committed path or the next stop.
         let stop = self.next_stop();
@@ -713,8 +733,12 @@ impl Planner {
                 a: 0.0,
             };
         }
-        self.state = next;
-        self.reached = next.s;
+        self.find_cruise(&before, &next, target);
+        next
+    }
+
+    /// Moves past the pieces behind `next` and samples it at time `t`.
+    fn sample_at(&mut self, t: f64, next: Motion) -> Sample {
         while self.pieces.len() > 1 && self.pieces.front().is_some_and(|p| p.end() < next.s) {
             if let Some(p) = self.pieces.pop_front() {
                 self.rest_pose = p.point(p.end()).pose;
@@ -769,22 +793,5 @@ impl Planner {
             }
         }
         Ok(())
-    }
-}
-
-fn piece_error(e: PieceError, loc: SourceLoc) -> MotionError {
-    match e {
-        PieceError::Absent(axis) => MotionError::AbsentAxis { loc, axis },
-        PieceError::Unplannable => MotionError::Unplannable { loc },
-    }
-}
-
-/// The path speed limit of a feed: `None` for rapid traverse.
-fn path_feed(feed: Feed, loc: SourceLoc) -> Result<Option<f64>, MotionError> {
-    match feed {
-        Feed::Rapid => Ok(None),
-        Feed::Rate(f) if f.is_finite() && f > 0.0 => Ok(Some(f)),
-        Feed::Rate(f) => Err(MotionError::BadFeed { loc, feed: f }),
-        Feed::PerRevolution(_) => Err(MotionError::NeedsSpindle { loc }),
     }
 }

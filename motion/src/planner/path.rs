@@ -700,16 +700,18 @@ fn try_corner(
             let mut out = Committed::default();
             push_part(&mut out, cur, cur.trim, len - dl);
             let shape = Shape::Blend(curve);
-            let step = length / parts as f64;
-            for k in 0..parts {
-                let from = step * k as f64;
-                let to = if k + 1 == parts { length } else { from + step };
+            for (from, to, before) in blend_parts(length, parts, dl, dr, cur.feed != next.feed) {
+                let (feed, loc) = match before {
+                    Some(true) => (cur.feed, cur.loc),
+                    Some(false) => (next.feed, next.loc),
+                    None => (feed, next.loc),
+                };
                 out.pieces.push(NewPiece {
                     shape: shape.clone(),
                     offset: from,
                     length: to - from,
                     feed,
-                    loc: next.loc,
+                    loc,
                     headroom,
                 });
             }
@@ -726,6 +728,46 @@ fn try_corner(
         }
     }
     None
+}
+
+/// Shortest stretch (mm) of a blend on either side of the joint it replaces that gets a
+/// piece of its own when the feeds on the two sides differ (a shorter one is part of its
+/// neighbour and takes the lower feed).
+const MIN_FEED_PART: f64 = 1e-6;
+
+/// The parts a blend of `length` is committed in: `parts` equal parts, cut once more at the
+/// programmed joint where the feeds on its two sides differ (`split_feed`). The joint lies
+/// `dl` into the blend's reach of `dl + dr` over the contour; it is placed at the same share
+/// of the blend's length. Each part comes with `Some(true)` when it lies before the joint
+/// (the feed of the element before holds there), `Some(false)` after it, `None` when the
+/// blend is not cut by feed (the lower feed holds).
+///
+/// A blend reaches as far into its neighbours as the tolerance allows; at a nearly straight
+/// joint that is up to half of each. Planned at the lower feed as a whole, a blend between
+/// a fast and a slow block would stretch the slow feed over half of the fast one; cut at
+/// the joint, each block's feed holds over its own stretch, and the speed changes there.
+fn blend_parts(
+    length: f64,
+    parts: usize,
+    dl: f64,
+    dr: f64,
+    split_feed: bool,
+) -> impl Iterator<Item = (f64, f64, Option<bool>)> {
+    let step = length / parts as f64;
+    let joint = (split_feed && dl + dr > 0.0)
+        .then(|| length * dl / (dl + dr))
+        .filter(|j| *j > MIN_FEED_PART && *j < length - MIN_FEED_PART);
+    (0..parts).flat_map(move |k| {
+        let from = step * k as f64;
+        let to = if k + 1 == parts { length } else { from + step };
+        let cut = joint.filter(|j| *j > from + MIN_FEED_PART && *j < to - MIN_FEED_PART);
+        let side = |a: f64| joint.map(|j| a < j);
+        let (first, second) = match cut {
+            Some(j) => ((from, j, side(from)), Some((j, to, side(j)))),
+            None => ((from, to, side(0.5 * (from + to))), None),
+        };
+        std::iter::once(first).chain(second)
+    })
 }
 
 /// True when a line of length `len` whose ends turn by at most `turn` (radians) may lie

@@ -47,7 +47,9 @@ pub(super) fn try_run(
     let mut to_stop = None;
     for j in 0..rest.len().min(RUN_ELEMENTS + 1) {
         let e = &rest[j].element;
-        if !linear_only(e) {
+        // A run is planned at one feed: it ends where the feed changes, and the corner
+        // there is blended with each feed on its own side (`path::blend_parts`).
+        if !linear_only(e) || e.feed != cur.feed {
             break;
         }
         let lj = e.segment.length();

@@ -196,6 +196,66 @@ impl Planner {
                 soft: false,
             });
         }
-        speed::settle(&mut w.limits);
+        self.settled.settle(&mut w.limits);
+    }
+}
+
+/// The limits of the last window before and after [`speed::settle`]. The window is scanned
+/// every period, but its limits change only where a piece enters or leaves it: the backward
+/// pass of an unchanged list gives the same result, so it is taken from here instead.
+#[derive(Debug, Clone, Default)]
+pub(super) struct SettleMemo {
+    /// The limits as the last scan collected them.
+    raw: Vec<Limit>,
+    /// The same after the backward pass.
+    settled: Vec<Limit>,
+}
+
+impl SettleMemo {
+    /// Settles `limits` (see [`speed::settle`]), reusing the last result when the list is
+    /// the same as last time.
+    fn settle(&mut self, limits: &mut Vec<Limit>) {
+        if *limits == self.raw {
+            limits.clone_from(&self.settled);
+            return;
+        }
+        self.raw.clone_from(limits);
+        speed::settle(limits);
+        self.settled.clone_from(limits);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The backward pass on its own.
+    fn settled(limits: &[Limit]) -> Vec<Limit> {
+        let mut l = limits.to_vec();
+        speed::settle(&mut l);
+        l
+    }
+
+    #[test]
+    fn the_memo_settles_as_the_backward_pass_does_whether_the_window_changed_or_not() {
+        // Three windows in a row: 30 mm/s then a stop 0.4 mm ahead (the backward pass lowers
+        // the first), the same again, then one whose stop has moved on.
+        let first = vec![
+            Limit::uniform(0.0, 50.0, 1000.0, 1e5, true),
+            Limit::uniform(0.2, 30.0, 1000.0, 1e5, false),
+            Limit::uniform(0.6, 0.0, 1000.0, 1e5, false),
+        ];
+        let mut moved = first.clone();
+        moved[2].at = 5.0;
+        let mut memo = SettleMemo::default();
+        for raw in [&first, &first, &moved, &first] {
+            let mut l = raw.clone();
+            memo.settle(&mut l);
+            assert_eq!(l, settled(raw));
+        }
+        // The pass did lower the 30 mm/s limit before the near stop, and not before the far
+        // one: the windows really settle differently.
+        assert!(settled(&first)[1].speed < 30.0);
+        assert_eq!(settled(&moved)[1].speed, 30.0);
     }
 }

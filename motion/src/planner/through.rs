@@ -65,8 +65,9 @@ pub(super) fn passes_under(x: &Motion, l: &Limit, rest: &[Limit]) -> Option<(f64
         }
         let ramp = Ramp::new(x.v, x.a, m.speed, accel, judged);
         // The ramp's speed only falls: already within `l`'s speed, it passes below it.
-        let below =
-            |r: &Ramp| x.v <= l.own || r.speed_after(l.at - x.s) <= l.own * (1.0 + LIMIT_SLACK);
+        let below = |r: &Ramp| {
+            x.v <= l.own || r.speed_after_at_most(l.at - x.s, l.own * (1.0 + LIMIT_SLACK))
+        };
         if ramp.distance() <= m.at - x.s && below(&ramp) {
             return Some((m.speed, grip, jerk));
         }

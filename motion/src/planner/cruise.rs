@@ -1,0 +1,195 @@
+//! Cruising: periods at constant speed far from every limit ahead, taken without the speed
+//! generator.
+//!
+//! Most of a long program's periods run at a piece's speed limit with zero acceleration and
+//! nothing to slow down for within several braking distances. There the generator would
+//! check every limit in the window each period only to find the same answer: speed held. So
+//! after a period the generator ended cruising, the planner works out how far the state may
+//! go on at that speed: up to twice the braking distance (with the limits' own acceleration
+//! and jerk) before every lower limit in the window, half the window's reach beyond which
+//! it has not looked, the point where the current piece could hand over to a faster next
+//! one (`Planner::go_target`), and four periods' travel short of each. Until then each
+//! period moves the state on by `v·T`; a feed override, a feed hold or a new window ends it
+//! (the next period is the generator's again).
+
+use super::Planner;
+use super::speed::{self, Motion};
+
+/// The cruise the state is on, if any.
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct Cruising {
+    /// The stretch found after the last period of the generator.
+    stretch: Option<Cruise>,
+    /// True when every period goes through the generator (tests compare the two).
+    off: bool,
+    /// Periods taken cruising so far.
+    taken: u64,
+}
+
+/// A stretch the state may cruise over without the generator.
+#[derive(Debug, Clone, Copy)]
+struct Cruise {
+    /// Path position the state may reach at most this way.
+    until: f64,
+    /// The speed it holds.
+    speed: f64,
+    /// The feed override it was found for.
+    factor: f64,
+}
+
+/// Periods' travel kept short of every limit and of the handover to the next piece.
+const CRUISE_MARGIN: f64 = 4.0;
+
+impl Planner {
+    /// The next state when the state may cruise on for one more period.
+    pub(super) fn cruise_step(&mut self) -> Option<Motion> {
+        let c = self.cruise.stretch?;
+        let x = self.state;
+        let dt = self.config.period;
+        let ok = !self.held
+            && self.factor == c.factor
+            && x.a == 0.0
+            && x.v == c.speed
+            && x.s + x.v * dt <= c.until;
+        if !ok {
+            self.cruise.stretch = None;
+            return None;
+        }
+        self.cruise.taken += 1;
+        Some(Motion {
+            s: x.s + x.v * dt,
+            v: x.v,
+            a: 0.0,
+        })
+    }
+
+    /// After a period of the generator that ended at `next` from the state before it, with
+    /// speed target `target`: the stretch it may cruise over from there, if any.
+    pub(super) fn find_cruise(&mut self, before: &Motion, next: &Motion, target: f64) {
+        self.cruise.stretch = None;
+        if self.cruise.off
+            || self.held
+            || next.a != 0.0
+            || before.a != 0.0
+            || next.v != before.v
+            || next.v != target
+        {
+            return;
+        }
+        let v = next.v;
+        if v <= 0.0 {
+            return;
+        }
+        let margin = CRUISE_MARGIN * v * self.config.period;
+        let from = Motion { s: 0.0, v, a: 0.0 };
+        let mut until = next.s + 0.5 * self.range;
+        for l in &self.window.limits {
+            if l.at <= next.s {
+                continue;
+            }
+            if l.speed < v {
+                let brake = speed::brake_distance(&from, l.speed, &l.grip, l.jerk);
+                if !brake.is_finite() {
+                    return;
+                }
+                until = until.min(l.at - 2.0 * brake);
+            }
+        }
+        // The handover to a faster next piece (`go_target`) starts within this reach of the
+        // current piece's end.
+        let k = self.current_index();
+        if let Some(p) = self.pieces.get(k) {
+            let accel = p.grip.most();
+            let ease = if accel.is_finite() {
+                accel / p.jerk
+            } else {
+                0.0
+            };
+            let reach = (v + accel.min(1e12) * ease) * ease + 2.0 * v * self.config.period;
+            until = until.min(p.end() - reach);
+        }
+        until -= margin;
+        if until > next.s + v * self.config.period {
+            self.cruise.stretch = Some(Cruise {
+                until,
+                speed: v,
+                factor: self.factor,
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::{Planner, Step};
+    use crate::config::{AxisLimits, PlannerConfig};
+    use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
+
+    fn line(from: Pose, to: Pose, feed: f64) -> Op {
+        Op {
+            kind: OpKind::Line {
+                from,
+                to,
+                feed: Feed::Rate(feed),
+            },
+            loc: SourceLoc::default(),
+        }
+    }
+
+    fn samples(ops: &[Op], off: bool) -> (Vec<(f64, Pose)>, u64) {
+        let l = AxisLimits {
+            max_velocity: 100.0,
+            max_acceleration: 1000.0,
+            max_jerk: 1e5,
+        };
+        let mut limits = [None; 9];
+        limits[..3].fill(Some(l));
+        let config = PlannerConfig {
+            limits,
+            period: 0.001,
+            tolerance: 0.01,
+        };
+        let mut p = Planner::new(config, Pose::ZERO).expect("valid config");
+        p.cruise.off = off;
+        let mut ops = ops.iter().cloned();
+        let mut out = Vec::new();
+        loop {
+            while p.needs_input() {
+                match ops.next() {
+                    Some(o) => p.push(o).expect("op accepted"),
+                    None => p.finish(),
+                }
+            }
+            match p.next_step() {
+                Some(Step::Sample(s)) => out.push((s.t, s.pose)),
+                Some(Step::Event(_)) => {}
+                None => break,
+            }
+        }
+        (out, p.cruise.taken)
+    }
+
+    #[test]
+    fn cruising_gives_the_generators_samples() {
+        // Long lines at two feeds, a slow stretch, corners and a stop in between: the
+        // samples with cruising are those of the generator alone, bit for bit.
+        let p = |x: f64, y: f64| Pose::xyz(x, y, 0.0);
+        let ops = vec![
+            line(p(0.0, 0.0), p(80.0, 0.0), 60.0),
+            line(p(80.0, 0.0), p(83.0, 0.001), 10.0),
+            line(p(83.0, 0.001), p(150.0, 0.001), 90.0),
+            line(p(150.0, 0.001), p(150.0, 60.0), 40.0),
+            line(p(150.0, 60.0), p(10.0, 20.0), 100.0),
+        ];
+        let (with, cruised) = samples(&ops, false);
+        let (without, none) = samples(&ops, true);
+        assert!(with.len() > 4000);
+        assert!(
+            cruised > with.len() as u64 / 2,
+            "{cruised} of {}",
+            with.len()
+        );
+        assert_eq!(none, 0);
+        assert_eq!(with, without);
+    }
+}
