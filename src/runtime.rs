@@ -24,12 +24,14 @@
 //! turn, the run holds position until the spindle reports at-speed, for at most the machine's
 //! `at_speed_timeout`.
 
+mod axis_fault;
 pub(crate) mod command;
 mod error;
 mod events;
 pub mod guard;
 mod operator;
 mod pacing;
+mod settle;
 mod spindle;
 mod stop;
 pub mod stream;
@@ -257,43 +259,6 @@ impl Run<'_, '_> {
         self.check_operator()
     }
 
-    /// The axis whose fault to report: one whose own device faulted (not one stopped only
-    /// because another device on its link did), else the first faulted axis.
-    fn faulted_axis(&self) -> Option<usize> {
-        let faulted: Vec<usize> = (self.io.feedback().iter().enumerate())
-            .filter(|(_, f)| f.fault.is_some())
-            .map(|(i, _)| i)
-            .collect();
-        faulted
-            .iter()
-            .copied()
-            .find(|&i| self.io.fault_origin(i).is_none_or(|o| o.primary))
-            .or(faulted.first().copied())
-    }
-
-    /// The error for the fault axis `i` reports, with the device and cause its backend
-    /// names when the fault's own words do not already say them.
-    pub(crate) fn axis_fault(&self, i: usize) -> RunError {
-        let fault = self
-            .io
-            .feedback()
-            .get(i)
-            .and_then(|f| f.fault.clone())
-            .unwrap_or(AxisFault::CommunicationLost);
-        let origin = self
-            .io
-            .fault_origin(i)
-            .map(|o| o.detail)
-            .filter(|d| !fault.to_string().contains(d.as_str()));
-        RunError::Fault {
-            axis: self.letters[i],
-            fault,
-            origin,
-            line: self.line,
-            block: self.last_loc.and_then(|l| l.block),
-        }
-    }
-
     /// In realtime mode, sleeps until the deadline of the cycle due at machine time `t`
     /// (see [`pacing`]).
     fn wait_until(&mut self, t: f64) {
@@ -377,59 +342,6 @@ impl Run<'_, '_> {
         self.command
             .setpoints(sample, &self.commanded, self.io.setpoints_mut());
         self.servo_cycle(t)
-    }
-
-    /// Holds until every positioning axis (one that follows its own profile behind a slow
-    /// link) has reached its last commanded position, each within its window and timeout.
-    fn settle_all(&mut self) -> Result<(), RunError> {
-        let from = self.t;
-        for axis in 0..self.letters.len() {
-            let Some((window, timeout)) = self.positioning[axis] else {
-                continue;
-            };
-            while (self.commanded[axis] - self.actual[axis]).abs() > window {
-                if self.t - from > timeout {
-                    return Err(RunError::Fault {
-                        axis: self.letters[axis],
-                        fault: AxisFault::FollowingError(self.commanded[axis] - self.actual[axis]),
-                        origin: None,
-                        line: self.line,
-                        block: self.last_loc.and_then(|l| l.block),
-                    });
-                }
-                self.hold_cycle()?;
-            }
-        }
-        Ok(())
-    }
-
-    /// At the program's end: holds the end point until every axis with an in-position
-    /// window (drives that follow on their own) stands within it, so the drives are not
-    /// switched off while still moving; an axis that does not get there in its time is an
-    /// error.
-    fn settle_end(&mut self) -> Result<(), RunError> {
-        let from = self.t;
-        for axis in 0..self.letters.len() {
-            let Some((window, timeout)) = self.end_windows[axis] else {
-                continue;
-            };
-            loop {
-                let distance = self.commanded[axis] - self.actual[axis];
-                if distance.abs() <= window {
-                    break;
-                }
-                if self.t - from > timeout {
-                    return Err(RunError::NotInPosition {
-                        axis: self.letters[axis],
-                        distance,
-                        window,
-                        timeout,
-                    });
-                }
-                self.hold_cycle()?;
-            }
-        }
-        Ok(())
     }
 
     /// One cycle holding the last commanded position; planner time stands still.
