@@ -4,21 +4,20 @@
 //! direction stops first; a port that cannot keep the configured parity is refused.
 //! The server's JSON log is the witness of what reached the device.
 
-#[path = "common/vfd_peer.rs"]
-mod vfd_peer;
+mod common;
 
-use serde_json::Value;
-use std::time::Duration;
-use vfd_peer::{
+use common::vfd_peer::{
     COMMAND, RUN_FORWARD, RUN_REVERSE, STOP, VfdPeer, command_writes, output_frequency_is,
 };
+use serde_json::Value;
+use std::time::Duration;
 
 /// M3 at 6000 rpm (100 Hz at 60 rpm/Hz) during a 6 s move, then M5.
 const LONG_CUT: &str = "0 BEGIN PGM P MM\n1 TOOL CALL 1 Z S6000\n2 L X+0 F200 M3\n\
                         3 L X+20\n4 L X+0 M5\n5 END PGM P MM\n";
 
 /// Starts klar on the long cut and waits until the VFD runs forward at speed.
-fn running(peer: &VfdPeer) -> vfd_peer::Klar {
+fn running(peer: &VfdPeer) -> common::vfd_peer::Klar {
     let machine = peer.machine("none");
     let program = peer.program("long.h", LONG_CUT);
     let klar = peer.klar(&program, &machine);

@@ -5,6 +5,7 @@
 
 pub mod mill5;
 pub mod peers;
+pub mod vfd_peer;
 
 use klar::config::MachineConfig;
 use klar::runtime::{RunFailure, RunOptions, RunReport, run_program};

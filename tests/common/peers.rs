@@ -5,6 +5,7 @@
 //! faults when the drive logs show what it waits for, and reads the drives' logs. Every wait
 //! is bounded; every child process is killed when the [`CanPeers`] is dropped.
 
+use super::vfd_peer::VfdPeer;
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -71,8 +72,8 @@ pub struct CanPeers {
     pub port: PathBuf,
     /// The drives, in the order given.
     pub drives: Vec<Drive>,
-    /// Other peers started for the test (a spindle VFD and its line).
-    others: Vec<Proc>,
+    /// A spindle VFD and its line, when the test started one.
+    vfd: Option<VfdPeer>,
     _hub: Proc,
 }
 
@@ -128,7 +129,7 @@ impl CanPeers {
             dir,
             port,
             drives,
-            others: Vec::new(),
+            vfd: None,
             _hub: hub,
         }
     }
@@ -160,68 +161,23 @@ impl CanPeers {
         }
     }
 
-    /// Starts a Delta-map spindle VFD (`delta_vfd_server.py`, unit 1, 19200 baud, no
-    /// parity: a pseudo-terminal refuses a parity setting) behind a null modem (`serial_relay.py`); returns the machine file's
-    /// `[spindle]` table for it. Its JSON-lines log is [`CanPeers::vfd_log`].
+    /// Starts a Delta-map spindle VFD behind a null modem ([`VfdPeer`], unit 1, no parity:
+    /// a pseudo-terminal refuses a parity setting); returns the machine file's `[spindle]`
+    /// table for it. Its JSON-lines log is [`CanPeers::vfd_log`].
     pub fn start_vfd(&mut self) -> String {
-        let klar_end = self.dir.join("vfd_klar");
-        let vfd_end = self.dir.join("vfd_dev");
-        let relay = Command::new(python())
-            .arg(peers_dir().join("serial_relay.py"))
-            .arg(&klar_end)
-            .arg(&vfd_end)
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("serial_relay.py starts");
-        self.others.push(Proc(relay));
-        assert!(
-            wait_for(Duration::from_secs(10), || klar_end.exists()
-                && vfd_end.exists()),
-            "serial_relay.py made no ports"
-        );
-        let vfd = Command::new(python())
-            .arg(peers_dir().join("delta_vfd_server.py"))
-            .arg(&vfd_end)
-            .args(["--parity", "N"])
-            .arg("--log")
-            .arg(self.dir.join("vfd.jsonl"))
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("delta_vfd_server.py starts");
-        self.others.push(Proc(vfd));
-        let up = wait_for(Duration::from_secs(15), || {
-            read_log(&self.dir.join("vfd.jsonl"))
-                .iter()
-                .any(|e| e["ev"] == "start")
-        });
-        assert!(up, "the VFD did not start");
-        format!(
-            r#"
-[spindle]
-max_rpm = 12000.0
-at_speed_timeout = 10.0
-[spindle.backend]
-kind = "modbus"
-[spindle.backend.vfd]
-unit = 1
-max_rpm = 24000.0
-[spindle.backend.vfd.serial]
-port = "{}"
-baud = 19200
-parity = "none"
-[spindle.backend.vfd.profile]
-preset = "delta"
-rpm_per_hz = 60.0
-"#,
-            klar_end.display()
-        )
+        let name = self
+            .dir
+            .file_name()
+            .map_or_else(|| "can".to_string(), |n| n.to_string_lossy().into_owned());
+        let vfd = VfdPeer::start(&name, 2000.0);
+        let table = vfd.spindle_table("none");
+        self.vfd = Some(vfd);
+        table
     }
 
-    /// The VFD's log records so far.
+    /// The VFD's log records so far (none without [`CanPeers::start_vfd`]).
     pub fn vfd_log(&self) -> Vec<serde_json::Value> {
-        read_log(&self.dir.join("vfd.jsonl"))
+        self.vfd.as_ref().map(VfdPeer::log).unwrap_or_default()
     }
 
     /// The drive on the port of `node`.

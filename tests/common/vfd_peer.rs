@@ -266,9 +266,8 @@ impl VfdPeer {
     }
 
     /// A machine TOML: one simulated X axis and the Modbus spindle on the relay's port
-    /// (`parity` as given, 100 ms timeout, 2 retries).
+    /// ([`VfdPeer::spindle_table`]).
     pub fn machine(&self, parity: &str) -> PathBuf {
-        let port = &self.port;
         let toml = format!(
             r#"name = "mill with the peers' Delta VFD"
 servo_period = 0.001
@@ -282,6 +281,20 @@ travel = [-100.0, 100.0]
 max_velocity = 100.0
 max_acceleration = 1000.0
 max_jerk = 20000.0
+{}"#,
+            self.spindle_table(parity)
+        );
+        let path = self.dir.join(format!("machine-{parity}.toml"));
+        std::fs::write(&path, toml).expect("write the machine TOML");
+        path
+    }
+
+    /// The machine file's `[spindle]` table for the VFD on the relay's port (`parity` as
+    /// given, 100 ms timeout, 2 retries).
+    pub fn spindle_table(&self, parity: &str) -> String {
+        let port = &self.port;
+        format!(
+            r#"
 [spindle]
 max_rpm = 12000.0
 at_speed_timeout = 5.0
@@ -301,10 +314,7 @@ retries = 2
 preset = "delta"
 rpm_per_hz = 60.0
 "#
-        );
-        let path = self.dir.join(format!("machine-{parity}.toml"));
-        std::fs::write(&path, toml).expect("write the machine TOML");
-        path
+        )
     }
 
     /// Writes `text` as a program in the peer's directory.
