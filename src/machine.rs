@@ -2,6 +2,7 @@
 //! index, and the spindle. One [`MachineIo::cycle`] is one servo cycle for every backend.
 
 use crate::config::{BackendConfig, MachineConfig, SimSpindleConfig, SpindleBackendConfig};
+use crate::runtime::AxisStart;
 use klar_drivers::can::memory::MemoryBus;
 use klar_drivers::can::slcan::{SlcanBus, SlcanOptions};
 use klar_drivers::cia402::{BusConfig, CanOpenConfig, Cia402Backend, DriveConfig};
@@ -274,6 +275,33 @@ fn open_canopen(
     }
     .map_err(|e| open_err(what, &name_axes(&e.to_string(), &letters)))?;
     Ok((backend, companions))
+}
+
+/// Where the axes of `config` stand, read from the drives that measure their own position
+/// (CANopen and Modbus servo axes) by opening the machine without enabling any drive; `None`
+/// when no axis has such a drive (simulated and step/dir axes stand at the file's `start`).
+/// Axes without a drive of their own report their `start` in the list.
+pub fn standing(config: &MachineConfig) -> Option<Result<Vec<AxisStart>, MachineError>> {
+    let measured = config.axes.iter().any(|a| {
+        matches!(
+            a.backend,
+            BackendConfig::Canopen(_) | BackendConfig::Modbus(_)
+        )
+    });
+    if !measured {
+        return None;
+    }
+    Some(MachineIo::open(config).map(|io| {
+        io.feedback()
+            .iter()
+            .zip(&config.axes)
+            .map(|(f, a)| AxisStart {
+                axis: a.letter,
+                position: f.position,
+                referenced: f.homed || config.start_homed,
+            })
+            .collect()
+    }))
 }
 
 impl MachineIo {

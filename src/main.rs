@@ -389,6 +389,26 @@ fn cmd_test_run(
     limits: &klar::testrun::TestRunLimits,
     quiet: bool,
 ) -> ExitCode {
+    // A machine with drives that measure their own position is checked from where they
+    // stand, as `klar run` would start (no drive is enabled to read it).
+    let mut measured = config.clone();
+    let standing = match klar::machine::standing(config) {
+        Some(Ok(at)) => {
+            for (a, s) in measured.axes.iter_mut().zip(&at) {
+                a.start = s.position;
+            }
+            at
+        }
+        Some(Err(e)) => {
+            eprintln!(
+                "warning: could not read where the drives stand ({e}): checked from the \
+                 machine file's start"
+            );
+            Vec::new()
+        }
+        None => Vec::new(),
+    };
+    let config = &measured;
     let report = klar::testrun::test_run_within(program, config, limits);
     print_diagnostics(&report.errors);
     for w in &report.warnings {
@@ -420,6 +440,19 @@ fn cmd_test_run(
     }
     if let Ok(preset) = config.active_preset() {
         say!("  preset at start: {preset}");
+    }
+    for s in &standing {
+        let unit = if s.axis.is_rotary() { "°" } else { "mm" };
+        let referenced = if s.referenced {
+            "referenced"
+        } else {
+            "not referenced"
+        };
+        say!(
+            "  {} stands at {:.4} {unit} ({referenced})",
+            s.axis,
+            s.position
+        );
     }
     ExitCode::SUCCESS
 }

@@ -15,6 +15,7 @@ use common::peers::*;
 use serde_json::Value;
 use serialport::SerialPort as _;
 use std::path::PathBuf;
+use std::process::Command;
 use std::sync::Mutex;
 use std::time::Duration;
 
@@ -168,6 +169,41 @@ fn a_second_run_starts_where_the_drives_stand() {
     let second = peers.write(
         "second.h",
         "0 BEGIN PGM B MM\n1 L X+5 F600\n2 L X+4 F600\n3 END PGM B MM\n",
+    );
+    // The check says where the drives stand, read without enabling any.
+    let enabled = |log: &[Value]| {
+        log.iter()
+            .filter(|e| e["ev"] == "state" && e["to"] == "OPERATION ENABLED")
+            .count()
+    };
+    let enabled_before = enabled(&peers.log(1));
+    let check = Command::new(env!("CARGO_BIN_EXE_klar"))
+        .arg("check")
+        .arg(&second)
+        .arg("--machine")
+        .arg(&machine)
+        .output()
+        .expect("klar check runs");
+    let checked = text(&check.stdout);
+    assert!(
+        check.status.success(),
+        "check: {checked}\n{}",
+        text(&check.stderr)
+    );
+    let stands: f64 = checked
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("X stands at"))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|x| x.parse().ok())
+        .expect("the check says where X stands");
+    assert!(
+        (stands - 4.95).abs() <= WINDOW_COUNTS / COUNTS_PER_MM,
+        "the check says X stands at {stands}"
+    );
+    assert_eq!(
+        enabled(&peers.log(1)),
+        enabled_before,
+        "the check enabled the drive"
     );
     let out = run_klar(&second, &machine, RUN_TIMEOUT);
     let stdout = text(&out.stdout);
