@@ -287,6 +287,17 @@ async fn scenario() {
     load_program(&c, &url, "rectangle.h").await;
     // Before the start: the DRO shows the mill's start position (X0 Y0 Z100).
     assert_eq!(dro(&c).await, [0.0, 0.0, 100.0]);
+    // The built-in mill starts referenced (`start_homed`): every axis says so.
+    for l in ["X", "Y", "Z"] {
+        let title = c
+            .find(Locator::Id(&format!("ref-{l}")))
+            .await
+            .unwrap_or_else(|e| panic!("#ref-{l}: {e}"))
+            .attr("title")
+            .await
+            .unwrap_or_else(|e| panic!("#ref-{l}: {e}"));
+        assert_eq!(title.as_deref(), Some("referenced"), "axis {l}");
+    }
     click(&c, "start").await;
 
     // The DRO moves.

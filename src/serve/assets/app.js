@@ -118,7 +118,7 @@ function buildDro(letters) {
   body.innerHTML = "";
   for (const l of letters) {
     const tr = document.createElement("tr");
-    tr.innerHTML = `<td class="letter">${l}</td><td id="cmd-${l}"></td><td id="act-${l}"></td><td class="fe" id="fe-${l}"></td>`;
+    tr.innerHTML = `<td class="letter" id="ref-${l}">${l}</td><td id="cmd-${l}"></td><td id="act-${l}"></td><td class="fe" id="fe-${l}"></td>`;
     body.appendChild(tr);
   }
   state.letters = letters;
@@ -133,6 +133,11 @@ function applySnapshot(s) {
     $("cmd-" + l).textContent = fmt(s.commanded[i], 3);
     $("act-" + l).textContent = fmt(s.actual[i], 3);
     $("fe-" + l).textContent = fmt(s.following_error[i], 4);
+    // An axis whose position is not referenced (not homed, no absolute encoder) is marked.
+    const referenced = !s.referenced || s.referenced[i];
+    const cell = $("ref-" + l);
+    cell.classList.toggle("unreferenced", !referenced);
+    cell.title = referenced ? "referenced" : "not referenced";
   });
   $("state").textContent = s.state;
   $("line-no").textContent = s.line;
