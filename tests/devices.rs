@@ -98,9 +98,11 @@ fn auxiliary_modbus_and_step_dir_axes_position_and_the_vfd_reaches_speed() {
     let (result, trace) = run(&program("aux_axes.h"), &m);
     let report = result.unwrap_or_else(|f| panic!("{}", f.error));
     assert!(report.realtime);
-    // S6000 at the simulated VFD's 8000 rpm/s ramp takes 0.75 s; the Modbus poll adds latency.
+    // S6000 at the simulated VFD's 8000 rpm/s ramp takes 0.75 s; the Modbus poll adds latency,
+    // and the wait is measured on the wall clock of a computer that may be busy with other
+    // tests (seen up to 1.5 s under a load of 12 on two cores).
     assert!(
-        (0.75..1.5).contains(&report.spindle_wait),
+        (0.75..3.0).contains(&report.spindle_wait),
         "spindle wait {} s",
         report.spindle_wait
     );
