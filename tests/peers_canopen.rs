@@ -350,66 +350,64 @@ fn assert_others_stopped(peers: &CanPeers, faulted: u8) {
     }
 }
 
-#[test]
-fn a_drive_fault_names_its_node_axis_and_code() {
-    let _one = serial();
-    let (out, peers) = fault_case("fault", 2, "fault 0x2310", true);
+/// A fault injected into `target` by `command` ends the run with a final line that holds
+/// every one of `words`, every drive but `target` (all of them when `target` is 0) is brought
+/// to a controlled stop, and with `spindle` the VFD is commanded to stop after it ran.
+/// Returns the peers for further checks.
+fn fault_named(
+    name: &str,
+    (target, command): (u8, &str),
+    spindle: bool,
+    words: &[&str],
+    others_of: u8,
+) -> CanPeers {
+    let (out, peers) = fault_case(name, target, command, spindle);
     assert!(!out.status.success());
     let last = final_line(&out);
     assert!(
-        last.contains("axis Y: drive fault 0x2310")
-            && last.contains("node 2")
-            && last.contains("continuous over-current"),
+        words.iter().all(|w| last.contains(w)),
         "{last}\n{}",
         text(&out.stderr)
     );
+    assert_others_stopped(&peers, others_of);
+    if spindle {
+        assert_spindle_stopped(&peers);
+    }
+    peers
+}
+
+#[test]
+fn a_drive_fault_names_its_node_axis_and_code() {
+    let _one = serial();
+    let words = [
+        "axis Y: drive fault 0x2310",
+        "node 2",
+        "continuous over-current",
+    ];
+    let peers = fault_named("fault", (2, "fault 0x2310"), true, &words, 2);
     assert_eq!(emcys(&peers.log(2)), vec!["0x2310".to_string()]);
-    assert_others_stopped(&peers, 2);
-    assert_spindle_stopped(&peers);
 }
 
 #[test]
 fn a_silent_heartbeat_names_its_node_and_axis() {
     let _one = serial();
-    let (out, peers) = fault_case("mute", 1, "mute", false);
-    assert!(!out.status.success());
-    let last = final_line(&out);
-    assert!(
-        last.contains("axis X: communication lost") && last.contains("node 1: heartbeat lost"),
-        "{last}\n{}",
-        text(&out.stderr)
-    );
+    let words = ["axis X: communication lost", "node 1: heartbeat lost"];
     // The muted drive itself still listens: it is stopped with the others.
-    assert_others_stopped(&peers, 0);
+    fault_named("mute", (1, "mute"), false, &words, 0);
 }
 
 #[test]
 fn a_node_going_offline_names_its_node_and_axis() {
     let _one = serial();
-    let (out, peers) = fault_case("offline", 3, "offline", true);
-    assert!(!out.status.success());
-    let last = final_line(&out);
-    assert!(
-        last.contains("axis Z: communication lost") && last.contains("node 3"),
-        "{last}\n{}",
-        text(&out.stderr)
-    );
-    assert_others_stopped(&peers, 3);
-    assert_spindle_stopped(&peers);
+    let words = ["axis Z: communication lost", "node 3"];
+    fault_named("offline", (3, "offline"), true, &words, 3);
 }
 
 #[test]
 fn a_power_cycled_drive_names_its_node_and_axis() {
     let _one = serial();
-    let (out, peers) = fault_case("powercycle", 2, "power-cycle", false);
-    assert!(!out.status.success());
-    let last = final_line(&out);
-    assert!(
-        last.contains("axis Y: communication lost") && last.contains("node 2"),
-        "{last}\n{}",
-        text(&out.stderr)
-    );
-    assert_others_stopped(&peers, 2);
+    let words = ["axis Y: communication lost", "node 2"];
+    fault_named("powercycle", (2, "power-cycle"), false, &words, 2);
 }
 
 /// Nothing was enabled: the drives never reached OPERATION ENABLED.
