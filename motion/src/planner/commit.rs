@@ -319,28 +319,12 @@ pub(super) fn path_feed(feed: Feed, loc: SourceLoc) -> Result<Option<f64>, Motio
 mod tests {
     use super::*;
     use crate::blend::Quintic;
-    use crate::config::{AxisLimits, PlannerConfig};
     use crate::geom::{Line, PathPoint, Segment};
     use crate::limits::Grip;
     use klar_interp::{Pose, SourceLoc};
 
     fn planner() -> Planner {
-        let l = AxisLimits {
-            max_velocity: 100.0,
-            max_acceleration: 1000.0,
-            max_jerk: 1e5,
-        };
-        let mut limits = [None; 9];
-        limits[..3].fill(Some(l));
-        let config = PlannerConfig {
-            limits,
-            period: 0.001,
-            tolerance: 0.01,
-        };
-        match Planner::new(config, Pose::xyz(0.0, 0.0, 0.0)) {
-            Ok(p) => p,
-            Err(e) => panic!("{e}"),
-        }
+        super::super::test_machine::planner()
     }
 
     /// A piece along X from `start` over `length` with jerk limit `jerk`: a line, or a

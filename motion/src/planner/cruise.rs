@@ -121,8 +121,7 @@ impl Planner {
 
 #[cfg(test)]
 mod tests {
-    use super::super::{Planner, Step};
-    use crate::config::{AxisLimits, PlannerConfig};
+    use super::super::Step;
     use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
 
     fn line(from: Pose, to: Pose, feed: f64) -> Op {
@@ -137,19 +136,7 @@ mod tests {
     }
 
     fn samples(ops: &[Op], off: bool) -> (Vec<(f64, Pose)>, u64) {
-        let l = AxisLimits {
-            max_velocity: 100.0,
-            max_acceleration: 1000.0,
-            max_jerk: 1e5,
-        };
-        let mut limits = [None; 9];
-        limits[..3].fill(Some(l));
-        let config = PlannerConfig {
-            limits,
-            period: 0.001,
-            tolerance: 0.01,
-        };
-        let mut p = Planner::new(config, Pose::ZERO).expect("valid config");
+        let mut p = super::super::test_machine::planner();
         p.cruise.off = off;
         let mut ops = ops.iter().cloned();
         let mut out = Vec::new();

@@ -36,6 +36,8 @@ mod scan;
 pub mod smooth;
 pub mod speed;
 pub mod tcpm;
+#[cfg(test)]
+mod test_machine;
 mod through;
 
 pub use tcpm::{TCPM_DERATE, TableGeometry};
