@@ -205,6 +205,29 @@ pub struct Ramp {
     phases: [(f64, f64); 3],
 }
 
+/// One constant-jerk phase of a [`Ramp`] as it starts: distance `s`, speed `v` and
+/// acceleration `a` at its start, its jerk `j` and duration `d`.
+#[derive(Debug, Clone, Copy)]
+struct PhaseStart {
+    s: f64,
+    v: f64,
+    a: f64,
+    j: f64,
+    d: f64,
+}
+
+impl PhaseStart {
+    /// Distance covered `h` seconds into the phase, from the ramp's start.
+    fn distance(&self, h: f64) -> f64 {
+        self.s + self.v * h + 0.5 * self.a * h * h + self.j * h * h * h / 6.0
+    }
+
+    /// Speed `h` seconds into the phase.
+    fn speed(&self, h: f64) -> f64 {
+        self.v + self.a * h + 0.5 * self.j * h * h
+    }
+}
+
 impl Ramp {
     /// The ramp from speed `v0` and acceleration `a0` to speed `target`, with path
     /// acceleration limit `accel` and jerk limit `jerk` (both positive and finite).
@@ -250,35 +273,45 @@ impl Ramp {
         0.0
     }
 
+    /// The phase in which the ramp covers `distance`, with the distance, speed and
+    /// acceleration at its start; `None` when the ramp ends before (the target speed holds
+    /// beyond). Phases of no length are skipped.
+    fn phase_reaching(&self, distance: f64) -> Option<PhaseStart> {
+        let (mut s, mut v, mut a) = (0.0, self.v0, self.a0);
+        for &(j, d) in &self.phases {
+            if d <= 0.0 {
+                continue;
+            }
+            let p = PhaseStart { s, v, a, j, d };
+            if p.distance(d) >= distance {
+                return Some(p);
+            }
+            s = p.distance(d);
+            v += a * d + 0.5 * j * d * d;
+            a += j * d;
+        }
+        None
+    }
+
     /// Speed once the ramp has covered `distance` (the target speed beyond its end), for a
     /// ramp whose speed stays positive until then. Within the phase where the distance is
     /// reached the time is found by bisection (the distance grows with time while the
     /// speed is positive); the speed is that at the bracket's earlier end, a hair before
     /// the distance is reached.
     pub fn speed_after(&self, distance: f64) -> f64 {
-        let (mut s, mut v, mut a) = (0.0, self.v0, self.a0);
-        for &(j, d) in &self.phases {
-            if d <= 0.0 {
-                continue;
+        let Some(p) = self.phase_reaching(distance) else {
+            return self.target;
+        };
+        let (mut lo, mut hi) = (0.0, p.d);
+        for _ in 0..SPEED_AFTER_STEPS {
+            let mid = 0.5 * (lo + hi);
+            if p.distance(mid) < distance {
+                lo = mid;
+            } else {
+                hi = mid;
             }
-            let at = |h: f64| s + v * h + 0.5 * a * h * h + j * h * h * h / 6.0;
-            if at(d) >= distance {
-                let (mut lo, mut hi) = (0.0, d);
-                for _ in 0..SPEED_AFTER_STEPS {
-                    let mid = 0.5 * (lo + hi);
-                    if at(mid) < distance {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
-                }
-                return v + a * lo + 0.5 * j * lo * lo;
-            }
-            s = at(d);
-            v += a * d + 0.5 * j * d * d;
-            a += j * d;
         }
-        self.target
+        p.speed(lo)
     }
 
     /// True when [`Ramp::speed_after`] of `distance` is at most `bound`, found with as few
@@ -288,46 +321,35 @@ impl Ramp {
     /// the bracket never decides (the speed within rounding of `bound`), the full
     /// bisection's speed is compared, as `speed_after` gives it.
     pub fn speed_after_at_most(&self, distance: f64, bound: f64) -> bool {
-        let (mut s, mut v, mut a) = (0.0, self.v0, self.a0);
-        for &(j, d) in &self.phases {
-            if d <= 0.0 {
-                continue;
-            }
-            let at = |h: f64| s + v * h + 0.5 * a * h * h + j * h * h * h / 6.0;
-            if at(d) >= distance {
-                let speed = |h: f64| v + a * h + 0.5 * j * h * h;
-                let margin = DECIDE_MARGIN * (v.abs() + bound.abs() + a.abs() * d);
-                let (mut lo, mut hi) = (0.0, d);
-                for _ in 0..SPEED_AFTER_STEPS {
-                    let (u, w) = (speed(lo), speed(hi));
-                    let (mut low, mut high) = (u.min(w), u.max(w));
-                    if j != 0.0 {
-                        let turn = -a / j;
-                        if turn > lo && turn < hi {
-                            low = low.min(speed(turn));
-                            high = high.max(speed(turn));
-                        }
-                    }
-                    if high <= bound - margin {
-                        return true;
-                    }
-                    if low > bound + margin {
-                        return false;
-                    }
-                    let mid = 0.5 * (lo + hi);
-                    if at(mid) < distance {
-                        lo = mid;
-                    } else {
-                        hi = mid;
-                    }
+        let Some(p) = self.phase_reaching(distance) else {
+            return self.target <= bound;
+        };
+        let margin = DECIDE_MARGIN * (p.v.abs() + bound.abs() + p.a.abs() * p.d);
+        let (mut lo, mut hi) = (0.0, p.d);
+        for _ in 0..SPEED_AFTER_STEPS {
+            let (u, w) = (p.speed(lo), p.speed(hi));
+            let (mut low, mut high) = (u.min(w), u.max(w));
+            if p.j != 0.0 {
+                let turn = -p.a / p.j;
+                if turn > lo && turn < hi {
+                    low = low.min(p.speed(turn));
+                    high = high.max(p.speed(turn));
                 }
-                return speed(lo) <= bound;
             }
-            s = at(d);
-            v += a * d + 0.5 * j * d * d;
-            a += j * d;
+            if high <= bound - margin {
+                return true;
+            }
+            if low > bound + margin {
+                return false;
+            }
+            let mid = 0.5 * (lo + hi);
+            if p.distance(mid) < distance {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
         }
-        self.target <= bound
+        p.speed(lo) <= bound
     }
 
     /// State `t ≥ 0` seconds after the start; cruise at the target after the ramp.
