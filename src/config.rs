@@ -656,6 +656,16 @@ impl MachineConfig {
             .map_or("", |m| m.name.as_str())
     }
 
+    /// This machine with every axis's `start` at `positions` (machine order): where the
+    /// drives were found standing, so that a test run checks from there.
+    pub fn starting_at(&self, positions: impl IntoIterator<Item = f64>) -> Self {
+        let mut c = self.clone();
+        for (a, x) in c.axes.iter_mut().zip(positions) {
+            a.start = x;
+        }
+        c
+    }
+
     /// The axis letters in machine order.
     pub fn letters(&self) -> Vec<AxisLetter> {
         self.axes.iter().map(|a| a.letter).collect()

@@ -291,17 +291,7 @@ pub fn standing(config: &MachineConfig) -> Option<Result<Vec<AxisStart>, Machine
     if !measured {
         return None;
     }
-    Some(MachineIo::open(config).map(|io| {
-        io.feedback()
-            .iter()
-            .zip(&config.axes)
-            .map(|(f, a)| AxisStart {
-                axis: a.letter,
-                position: f.position,
-                referenced: f.homed || config.start_homed,
-            })
-            .collect()
-    }))
+    Some(MachineIo::open(config).map(|io| io.standing(config)))
 }
 
 impl MachineIo {
@@ -650,6 +640,20 @@ impl MachineIo {
     /// Feedback of the last cycle, one per machine axis.
     pub fn feedback(&self) -> &[AxisFeedback] {
         &self.feedback
+    }
+
+    /// Where each axis of `config` stands by the last feedback, and whether its position is
+    /// referenced (homed, an absolute encoder, or `start_homed` in the machine file).
+    pub fn standing(&self, config: &MachineConfig) -> Vec<AxisStart> {
+        self.feedback
+            .iter()
+            .zip(&config.axes)
+            .map(|(f, a)| AxisStart {
+                axis: a.letter,
+                position: f.position,
+                referenced: f.homed || config.start_homed,
+            })
+            .collect()
     }
 
     /// Per machine axis: how many servo cycles its feedback lags behind its setpoints

@@ -391,14 +391,8 @@ fn cmd_test_run(
 ) -> ExitCode {
     // A machine with drives that measure their own position is checked from where they
     // stand, as `klar run` would start (no drive is enabled to read it).
-    let mut measured = config.clone();
     let standing = match klar::machine::standing(config) {
-        Some(Ok(at)) => {
-            for (a, s) in measured.axes.iter_mut().zip(&at) {
-                a.start = s.position;
-            }
-            at
-        }
+        Some(Ok(at)) => at,
         Some(Err(e)) => {
             eprintln!(
                 "warning: could not read where the drives stand ({e}): checked from the \
@@ -408,7 +402,13 @@ fn cmd_test_run(
         }
         None => Vec::new(),
     };
-    let config = &measured;
+    let measured;
+    let config = if standing.is_empty() {
+        config
+    } else {
+        measured = config.starting_at(standing.iter().map(|s| s.position));
+        &measured
+    };
     let report = klar::testrun::test_run_within(program, config, limits);
     print_diagnostics(&report.errors);
     for w in &report.warnings {
@@ -442,17 +442,7 @@ fn cmd_test_run(
         say!("  preset at start: {preset}");
     }
     for s in &standing {
-        let unit = if s.axis.is_rotary() { "°" } else { "mm" };
-        let referenced = if s.referenced {
-            "referenced"
-        } else {
-            "not referenced"
-        };
-        say!(
-            "  {} stands at {:.4} {unit} ({referenced})",
-            s.axis,
-            s.position
-        );
+        say!("  {s}");
     }
     ExitCode::SUCCESS
 }

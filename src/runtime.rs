@@ -107,6 +107,23 @@ pub struct AxisStart {
     pub referenced: bool,
 }
 
+impl std::fmt::Display for AxisStart {
+    /// `X stands at 4.9500 mm (referenced)`.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let unit = if self.axis.is_rotary() { "°" } else { "mm" };
+        let referenced = if self.referenced {
+            "referenced"
+        } else {
+            "not referenced"
+        };
+        write!(
+            f,
+            "{} stands at {:.4} {unit} ({referenced})",
+            self.axis, self.position
+        )
+    }
+}
+
 /// A run that ended early: the error plus what was measured until then.
 #[derive(Debug)]
 pub struct RunFailure {
@@ -423,10 +440,7 @@ impl<'a, 'w> Run<'a, 'w> {
         // file's `start`: the test run and the run start from there.
         let at: Vec<f64> = io.feedback().iter().map(|f| f.position).collect();
         if config.check_before_run {
-            let mut measured = config.clone();
-            for (a, &x) in measured.axes.iter_mut().zip(&at) {
-                a.start = x;
-            }
+            let measured = config.starting_at(at.iter().copied());
             let checked = crate::testrun::test_run(path, &measured);
             for w in checked.warnings.iter().chain(&checked.gave_up) {
                 tracing::warn!("{w}");
@@ -435,29 +449,10 @@ impl<'a, 'w> Run<'a, 'w> {
                 return Err(fail(RunError::Syntax(checked.errors), &report));
             }
         }
-        for ((f, &l), a) in io.feedback().iter().zip(&letters).zip(&config.axes) {
-            let unit = if l.is_rotary() { "deg" } else { "mm" };
-            let referenced = if f.homed || config.start_homed {
-                "referenced"
-            } else {
-                "not referenced"
-            };
-            tracing::info!(
-                "axis {l} stands at {:.4} {unit} ({referenced}; machine file start {:.4})",
-                f.position,
-                a.start
-            );
+        report.start = io.standing(config);
+        for (s, a) in report.start.iter().zip(&config.axes) {
+            tracing::info!("axis {s}; machine file start {:.4}", a.start);
         }
-        report.start = io
-            .feedback()
-            .iter()
-            .zip(&letters)
-            .map(|(f, &l)| AxisStart {
-                axis: l,
-                position: f.position,
-                referenced: f.homed || config.start_homed,
-            })
-            .collect();
         if let Some(sim) = io.sim_axes() {
             sim.schedule(&config.faults).map_err(|e| {
                 let e = MachineError::Open {
