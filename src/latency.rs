@@ -1,6 +1,7 @@
 //! Wake-up lateness on the wall clock: the monotonic clock, sleeps to absolute deadlines,
 //! a fixed-size histogram of how late each wake-up came, and the `klar latency` measurement
-//! (the machine's own wake-up latency, without a program or a bus).
+//! (the machine's own wake-up latency, without a program or a bus), and [`Pacer`], the
+//! schedule both the servo loop of a realtime run and `klar latency` keep.
 //!
 //! The histogram has one bucket per microsecond up to [`FINE_LIMIT_US`], then one per
 //! [`COARSE_STEP_US`] up to [`COARSE_LIMIT_US`], and one overflow bucket; the largest value
@@ -201,25 +202,60 @@ impl fmt::Display for LatenessSummary {
     }
 }
 
-/// Measures the wake-up lateness of a loop sleeping to absolute deadlines `period_s`
-/// apart for `seconds`. Like the servo loop, a wake-up more than half a period late moves
-/// the schedule on to it (one stall is counted once, not again by every deadline it
-/// delayed).
-pub fn measure(period_s: f64, seconds: f64) -> LatencyHistogram {
-    let mut hist = LatencyHistogram::new();
-    let period = (period_s * 1e9).round().max(1.0) as i64;
-    let cycles = (seconds / period_s).ceil().max(1.0) as u64;
-    let mut due = now_ns() + period;
-    for _ in 0..cycles {
-        sleep_until(due);
-        let late = now_ns() - due;
-        hist.record(late);
-        if late > period / 2 {
-            due += late;
+/// The wall-clock schedule of a realtime run and of `klar latency`: every cycle waits for
+/// its absolute deadline, one servo period after the one before, and its lateness goes into
+/// the histogram. A cycle that wakes more than half a period late has missed its slot: it
+/// counts as an underrun and the schedule is moved on to it, so the cycles after it keep one
+/// period apart instead of catching up in a burst (a burst of SYNCs would shorten the period
+/// the drives interpolate over, and a wait counted in cycles would end early on the wall).
+pub struct Pacer {
+    /// Monotonic time of machine time 0, ns.
+    origin: i64,
+    /// Half the servo period, ns: the lateness that makes a missed slot.
+    half_period: i64,
+    /// Lateness of every wake-up.
+    pub histogram: LatencyHistogram,
+}
+
+impl Pacer {
+    /// A schedule starting now, for a servo period of `period` seconds.
+    pub fn new(period: f64) -> Self {
+        Self {
+            origin: now_ns(),
+            half_period: (period * 0.5e9).round() as i64,
+            histogram: LatencyHistogram::new(),
         }
-        due += period;
     }
-    hist
+
+    /// Sleeps until the deadline of machine time `t`; returns how late the wake-up came
+    /// (seconds) and whether the slot was missed (the schedule then moves on).
+    pub fn wait(&mut self, t: f64) -> (f64, bool) {
+        let due = self.origin + (t * 1e9).round() as i64;
+        sleep_until(due);
+        let late = (now_ns() - due).max(0);
+        self.histogram.record(late);
+        let missed = late > self.half_period;
+        if missed {
+            self.origin += late;
+        }
+        (late as f64 * 1e-9, missed)
+    }
+
+    /// Moves every later deadline by `seconds` (a stall the run waited out).
+    pub fn delay(&mut self, seconds: f64) {
+        self.origin += (seconds * 1e9).round() as i64;
+    }
+}
+
+/// Measures the wake-up lateness of a loop sleeping to absolute deadlines `period_s`
+/// apart for `seconds`, on the servo loop's own schedule ([`Pacer`]).
+pub fn measure(period_s: f64, seconds: f64) -> LatencyHistogram {
+    let cycles = (seconds / period_s).ceil().max(1.0) as u64;
+    let mut pacer = Pacer::new(period_s);
+    for k in 1..=cycles {
+        pacer.wait(k as f64 * period_s);
+    }
+    pacer.histogram
 }
 
 #[cfg(test)]

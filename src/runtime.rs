@@ -30,13 +30,13 @@ mod error;
 mod events;
 pub mod guard;
 mod operator;
-mod pacing;
 mod settle;
 mod spindle;
 mod stop;
 pub mod stream;
 
 use crate::config::MachineConfig;
+use crate::latency::Pacer;
 use crate::machine::{MachineError, MachineIo};
 use crate::monitor::{StopCause, StopReport};
 use crate::testrun::{check_positioning, check_travel, planner_ops, positioning_axes};
@@ -46,7 +46,6 @@ pub use error::RunError;
 use klar_interp::{AxisLetter, Op, SourceLoc};
 use klar_motion::{AxisFault, Planner, Sample, Step};
 pub use operator::{OperatorStop, StopLevel};
-use pacing::Pacer;
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
@@ -277,7 +276,7 @@ impl Run<'_, '_> {
     }
 
     /// In realtime mode, sleeps until the deadline of the cycle due at machine time `t`
-    /// (see [`pacing`]).
+    /// (see [`Pacer`]).
     fn wait_until(&mut self, t: f64) {
         if self.report.realtime {
             self.wall_late = self.pacer.wait(t);
