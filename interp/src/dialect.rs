@@ -27,11 +27,11 @@ pub(crate) trait DialectRun: Iterator<Item = Result<Op, Diagnostic>> + Send {
     /// [`crate::Interpreter`] is told about the machine (tools, rotary axes, M functions,
     /// datum and preset tables, working-plane ops, …) goes to this machine. Lathe DIN has its
     /// own lathe model and takes none of these (see [`crate::Interpreter::with_tools`]).
-    fn klartext_machine(&mut self) -> Option<&mut crate::klartext::exec::Machine> {
+    fn klartext_machine(&mut self) -> Option<&mut crate::tnc::exec::Machine> {
         None
     }
     /// Read access to [`DialectRun::klartext_machine`].
-    fn klartext_machine_ref(&self) -> Option<&crate::klartext::exec::Machine> {
+    fn klartext_machine_ref(&self) -> Option<&crate::tnc::exec::Machine> {
         None
     }
 }

@@ -7,12 +7,12 @@ use std::path::{Path, PathBuf};
 
 use crate::diag::{Diagnostic, ProgramError};
 use crate::dialect::{Dialect, DialectRun, detect_dialect, runner};
-use crate::klartext::cycle_table::DatumTable;
-use crate::klartext::exec::{Blank, Flow, LabelKey, Machine};
 use crate::klartext::parser::{Block, LabelRef, Parser, Stmt, is_begin_block};
-use crate::klartext::tools::ToolTable;
 use crate::op::{Op, Pose, SourceLoc};
 use crate::source::{BlockReader, BlockStart, ProgramInput};
+use crate::tnc::cycle_table::DatumTable;
+use crate::tnc::exec::{Blank, Flow, LabelKey, Machine};
+use crate::tnc::tools::ToolTable;
 
 #[path = "interpreter_check.rs"]
 mod check;

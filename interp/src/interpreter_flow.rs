@@ -10,10 +10,10 @@ use super::{
 };
 use crate::diag::{Diagnostic, ProgramError};
 use crate::dialect::Dialect;
-use crate::klartext::exec::{Flow, LabelKey};
 use crate::klartext::parser::{LabelRef, Stmt};
 use crate::op::SourceLoc;
 use crate::source::{BlockStart, ProgramInput};
+use crate::tnc::exec::{Flow, LabelKey};
 
 /// Opens a Klartext file for reading, checking its dialect.
 fn open_klartext(path: &Path) -> Result<Box<dyn ProgramInput>, Diagnostic> {

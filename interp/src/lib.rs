@@ -1,9 +1,12 @@
 //! klar-interp: HEIDENHAIN program text → canonical [`op::Op`] stream.
 //!
-//! Dialects: TNC conversational Klartext (`.h`), TNC ISO (`.i`, mapped onto the Klartext
-//! machine: [`iso`]) and lathe DIN (`.nc`: [`din`]). The interpreter streams: it reads a
-//! block, executes it against its modal state and emits the resulting ops, each with the
-//! source location of its block, so memory use does not grow with the program.
+//! Dialects: the two TNC languages — conversational Klartext (`.h`, front-end `klartext`)
+//! and TNC ISO (`.i`, front-end [`iso`]) — read their text into the statements of one TNC
+//! machine (`tnc`: the executor with its modal state, parameters, contours, working plane,
+//! cycles and tables); the lathe DIN dialect (`.nc`: [`din`]) has its own. The shared
+//! machining cycles are in [`cycles`]. The interpreter streams: it reads a block, executes it
+//! against its modal state and emits the resulting ops, each with the source location of its
+//! block, so memory use does not grow with the program.
 
 #![warn(missing_docs)]
 
@@ -17,6 +20,7 @@ pub mod iso;
 pub(crate) mod klartext;
 pub mod op;
 mod source;
+pub(crate) mod tnc;
 
 pub use diag::{Diagnostic, MAX_QUOTED_CHARS, ProgramError, shorten_words};
 pub use dialect::{Dialect, detect_dialect};
@@ -25,13 +29,13 @@ pub use interpreter::{
     CHECK_DIAGNOSTIC_LIMIT, CHECK_JUMP_LIMIT, CheckReport, Interpreter, MAX_PROGRAM_DEPTH,
     MAX_SUBPROGRAM_DEPTH, RUN_IDLE_JUMP_LIMIT, check, check_report, syntax_check,
 };
-pub use klartext::contour::SPLINE_START_TOLERANCE;
-pub use klartext::cycle_table::{DatumTable, DatumTableError};
-pub use klartext::exec::{Blank, C_RADIUS_TOLERANCE, MAX_IPA};
-pub use klartext::table::MAX_TABLE_FILE;
-pub use klartext::tools::{Tool, ToolTable, ToolTableError};
 pub use op::{
     ApproachShape, AxisLetter, CompSide, CornerRule, Feed, Op, OpKind, Plane, Pose, SourceLoc,
     SplineAxis,
 };
 pub use source::MAX_BLOCK_BYTES;
+pub use tnc::contour::SPLINE_START_TOLERANCE;
+pub use tnc::cycle_table::{DatumTable, DatumTableError};
+pub use tnc::exec::{Blank, C_RADIUS_TOLERANCE, MAX_IPA};
+pub use tnc::table::MAX_TABLE_FILE;
+pub use tnc::tools::{Tool, ToolTable, ToolTableError};

@@ -550,7 +550,7 @@ impl OpKind {
     /// untilted workpiece system: X Y Z of its points turned, an arc as lines within
     /// 1 µm of it, a spline with turned coefficients; ops without points unchanged.
     pub fn in_workpiece(&self, rotation: &[[f64; 3]; 3]) -> Vec<OpKind> {
-        crate::klartext::plane_output::tilt_kind(rotation, self)
+        crate::tnc::plane_output::tilt_kind(rotation, self)
     }
 
     /// True for ops that move axes.

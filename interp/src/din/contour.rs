@@ -18,8 +18,8 @@ use super::block::{DinValue, DinWord};
 use super::lathe::{Group, Lathe, err_at, groups, num};
 use super::unknown::{self, LineSpec};
 use crate::diag::ProgramError;
-use crate::klartext::exec::ExecError;
 use crate::op::{AxisLetter, Feed, Op, OpKind, Plane, Pose, SourceLoc};
+use crate::tnc::exec::ExecError;
 
 /// A contour element in the turning plane: points are (z, x radius).
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -23,8 +23,8 @@ use std::collections::VecDeque;
 use super::lathe::{Group, Lathe, err_at, num};
 use super::pattern::{CircleLayout, LinearStep, PatternEnd, linear_positions};
 use crate::diag::ProgramError;
-use crate::klartext::exec::ExecError;
 use crate::op::{AxisLetter, Feed, Op, Pose, SourceLoc, SpindleDir};
+use crate::tnc::exec::ExecError;
 
 /// A G745 pattern waiting for its cycle (or drilling by itself with ZE).
 #[derive(Debug, Clone, PartialEq)]

@@ -32,10 +32,10 @@ use super::lateral::{self, LateralPattern};
 use super::lathe::{FeedUnit, Group, Lathe, TOOL_CHANGE_POINT, err_at, groups, num};
 use super::roughing::{self, Bar};
 use crate::diag::ProgramError;
-use crate::klartext::exec::ExecError;
 use crate::op::{
     AxisLetter, CompSide, Feed, Op, OpKind, Pose, SourceLoc, SpindleDir, SpindleSpeed,
 };
+use crate::tnc::exec::ExecError;
 
 /// What happens after a block.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

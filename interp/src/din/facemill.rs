@@ -25,9 +25,9 @@ use std::collections::VecDeque;
 use super::cycles::{FacePattern, face_in_turned, face_pose};
 use super::lathe::{Group, Lathe, err_at, groups, num};
 use crate::diag::ProgramError;
-use crate::klartext::exec::{C_RADIUS_TOLERANCE, ExecError};
-use crate::klartext::geom;
 use crate::op::{AxisLetter, Feed, Op, OpKind, Plane, SourceLoc};
+use crate::tnc::exec::{C_RADIUS_TOLERANCE, ExecError};
+use crate::tnc::geom;
 
 /// Most elements of one contour.
 pub const MAX_ELEMENTS: usize = 10_000;

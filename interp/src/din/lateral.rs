@@ -28,8 +28,8 @@ use super::cycles::{self, CycleCall, pattern_count};
 use super::lathe::{Group, Lathe, err_at, num};
 use super::pattern::{CircleLayout, LinearStep, PatternEnd, linear_positions};
 use crate::diag::ProgramError;
-use crate::klartext::exec::ExecError;
 use crate::op::{AxisLetter, Feed, Op, SourceLoc};
+use crate::tnc::exec::ExecError;
 
 /// A lateral pattern waiting for its cycle (or drilling by itself with XE).
 #[derive(Debug, Clone, PartialEq)]

@@ -13,12 +13,12 @@ use std::collections::VecDeque;
 
 use super::block::{DinValue, DinWord};
 use crate::diag::ProgramError;
-use crate::klartext::exec::{C_RADIUS_TOLERANCE, ExecError};
-use crate::klartext::geom;
 use crate::op::{
     AxisLetter, CompSide, Feed, Op, OpKind, Plane, Pose, SourceLoc, SpindleDir, SpindleId,
     SpindleSpeed,
 };
+use crate::tnc::exec::{C_RADIUS_TOLERANCE, ExecError};
+use crate::tnc::geom;
 
 /// The tool change point of the built-in lathe used by G14: X diameter 200 mm, Z 200 mm.
 pub const TOOL_CHANGE_POINT: (f64, f64) = (200.0, 200.0);

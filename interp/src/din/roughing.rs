@@ -29,8 +29,8 @@ use std::collections::VecDeque;
 use super::contour::Seg;
 use super::lathe::{Group, Lathe, num};
 use crate::diag::ProgramError;
-use crate::klartext::exec::ExecError;
 use crate::op::{AxisLetter, Feed, Op, Pose, SourceLoc};
+use crate::tnc::exec::ExecError;
 
 /// Lift-off and clearance distance of the roughing cuts, mm.
 pub const SAFETY: f64 = 1.0;

@@ -8,7 +8,7 @@
 //! parameter formulas (`Q1 = …`) are recognised here and handed on as such.
 
 use crate::diag::ProgramError;
-use crate::klartext::expr::{MAX_PARAM, ParamKind, ParamRef, Value};
+use crate::tnc::expr::{MAX_PARAM, ParamKind, ParamRef, Value};
 
 /// Most words one block may carry.
 pub(crate) const MAX_WORDS: usize = 32;

@@ -32,11 +32,12 @@ use std::collections::VecDeque;
 use super::block::{Addr, IsoBlock, IsoWord};
 use super::exec::{IsoFlow, IsoState, err, letter, m_words};
 use crate::diag::ProgramError;
-use crate::klartext::cycle::{CallKind, OLD_WORD_LEN, OldItem, QEntry, q_entries};
-use crate::klartext::exec::{ExecError, Flow};
-use crate::klartext::expr::Value;
-use crate::klartext::parser::{Stmt, Words};
+use crate::klartext::cycle::q_entries;
 use crate::op::{AxisLetter, Op, SourceLoc};
+use crate::tnc::cycle_words::{CallKind, OLD_WORD_LEN, OldItem, QEntry};
+use crate::tnc::exec::{ExecError, Flow};
+use crate::tnc::expr::Value;
+use crate::tnc::stmt::{Stmt, Words};
 
 /// A cycle definition whose `Q…=` lines are still being read.
 #[derive(Debug)]

@@ -10,10 +10,10 @@ use super::block::IsoBlock;
 use super::block::IsoWord;
 use super::exec::{IsoFlow, IsoState, code, err, letter};
 use crate::diag::ProgramError;
-use crate::klartext::exec::ExecError;
-use crate::klartext::expr::{BinOp, Func, ParamKind, ParamRef, Rpn, Value};
 use crate::klartext::parser::Stmt;
 use crate::op::{Op, SourceLoc};
+use crate::tnc::exec::ExecError;
+use crate::tnc::expr::{BinOp, Func, ParamKind, ParamRef, Rpn, Value};
 
 impl IsoState {
     /// D00–D13: parameter functions; D09–D12 conditional jumps.

@@ -26,10 +26,10 @@ use std::collections::VecDeque;
 
 use super::block::{Addr, IsoBlock, IsoWord};
 use crate::diag::ProgramError;
-use crate::klartext::exec::{ExecError, Flow, Machine};
-use crate::klartext::expr::Value;
 use crate::klartext::parser::{Coord, FeedWord, MAX_M, Parser, Stmt, ToolCall, ToolId, Words};
 use crate::op::{AxisLetter, CompSide, Op, OpKind, SourceLoc};
+use crate::tnc::exec::{ExecError, Flow, Machine};
+use crate::tnc::expr::Value;
 
 /// What the runner does after a block.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -15,11 +15,11 @@ use super::block::{Addr, IsoBlock, IsoKind};
 use super::exec::{IsoFlow, IsoState};
 use crate::diag::{Diagnostic, ProgramError};
 use crate::dialect::DialectRun;
-use crate::klartext::exec::Machine;
-use crate::klartext::expr::Value;
 use crate::klartext::parser::Stmt;
 use crate::op::{Op, Pose, SourceLoc};
 use crate::source::{BlockReader, BlockStart, ProgramInput};
+use crate::tnc::exec::Machine;
+use crate::tnc::expr::Value;
 
 /// Deepest subprogram nesting accepted.
 pub const MAX_CALL_DEPTH: usize = 64;

@@ -1,13 +1,13 @@
 //! Q parameter assignments: `FN 0..8, 13` and `Qn = formula`, compiled to postfix code.
 
-use super::expr::{BinOp, Func, ParamRef, Rpn};
 use super::lexer::{Lexer, TokKind};
 use super::parser::{
     MAX_DEPTH, PResult, Parser, Stmt, describe, param_index, param_kind, required, text_of,
     unexpected, upper,
 };
 use crate::diag::ProgramError;
-use crate::klartext::expr::Value;
+use crate::tnc::expr::Value;
+use crate::tnc::expr::{BinOp, Func, ParamRef, Rpn};
 
 impl Parser {
     /// `FN n: target = operands`.

@@ -16,11 +16,11 @@
 //! does not run (the keyword `FK` alone, other FN numbers, …) are recognised by their keyword
 //! and reported as not supported when executed.
 
-pub(crate) use super::block::*;
 use super::lexer::{Lexer, TokKind, Token};
 use crate::diag::ProgramError;
-use crate::klartext::expr::{MAX_PARAM, ParamKind, ParamRef, Rpn, Value};
 use crate::op::AxisLetter;
+use crate::tnc::expr::{MAX_PARAM, ParamKind, ParamRef, Value};
+pub(crate) use crate::tnc::stmt::*;
 
 pub(super) type PResult<T> = Result<T, (usize, ProgramError)>;
 
@@ -38,27 +38,10 @@ pub(super) const PATH: u16 = W_COMP | W_FEED | W_M;
 /// Deepest parenthesis/function nesting accepted in a formula.
 pub(super) const MAX_DEPTH: u32 = 64;
 
-/// Parses blocks; owns the reused formula buffer.
-#[derive(Debug, Default)]
-pub(crate) struct Parser {
-    /// Postfix code of the last parsed assignment.
-    pub code: Vec<Rpn>,
-    /// Words of the last parsed path, CC, M, STOP or BLK FORM block.
-    pub words: Words,
-    /// Words of the last parsed TOOL CALL.
-    pub tool: ToolCall,
-    /// Coefficients of the last parsed SPL block.
-    pub spline: SplineWords,
-    /// Words of the last parsed cycle block (CYCL DEF, PATTERN DEF).
-    pub cycle: super::cycle::CycleWords,
-    /// Words of the last parsed FK block.
-    pub fk: super::fk::FkWords,
-    /// Words of the last parsed PLANE block.
-    pub plane: super::plane::PlaneWords,
-    /// Byte range of the program name in the last parsed BEGIN PGM or END PGM block (empty
-    /// when the block names none).
-    pub program_name: (usize, usize),
-}
+/// The Klartext parser: reads a block's text into its [`Stmt`] and the block's words
+/// ([`crate::tnc::stmt::Parsed`], which the TNC core executes; the parsing methods live in
+/// this front-end).
+pub(crate) use crate::tnc::stmt::Parsed as Parser;
 
 /// Upper-cases an identifier into a small stack buffer (longer ones are cut, which makes them
 /// unknown words).
@@ -69,10 +52,6 @@ pub(super) fn upper(bytes: &[u8]) -> ([u8; 16], usize) {
         *o = b.to_ascii_uppercase();
     }
     (out, if bytes.len() > 16 { 16 } else { n })
-}
-
-pub(super) fn text_of(bytes: &[u8]) -> String {
-    bytes.iter().map(|&b| char::from(b)).collect()
 }
 
 pub(super) fn describe(lx: &Lexer<'_>, t: Token) -> String {
@@ -406,12 +385,12 @@ impl Parser {
                 self.words(lx, W_AXES | W_POLAR | PATH, "CTP")?;
                 Ok(Stmt::CircleTangentPolar)
             }
-            b"FPOL" => self.fk_block(lx, super::fk::FkKind::Pole),
-            b"FL" => self.fk_block(lx, super::fk::FkKind::Line),
-            b"FLT" => self.fk_block(lx, super::fk::FkKind::LineTangent),
-            b"FC" => self.fk_block(lx, super::fk::FkKind::Arc),
-            b"FCT" => self.fk_block(lx, super::fk::FkKind::ArcTangent),
-            b"FSELECT" => self.fk_block(lx, super::fk::FkKind::Select),
+            b"FPOL" => self.fk_block(lx, crate::tnc::fk_words::FkKind::Pole),
+            b"FL" => self.fk_block(lx, crate::tnc::fk_words::FkKind::Line),
+            b"FLT" => self.fk_block(lx, crate::tnc::fk_words::FkKind::LineTangent),
+            b"FC" => self.fk_block(lx, crate::tnc::fk_words::FkKind::Arc),
+            b"FCT" => self.fk_block(lx, crate::tnc::fk_words::FkKind::ArcTangent),
+            b"FSELECT" => self.fk_block(lx, crate::tnc::fk_words::FkKind::Select),
             b"FK" => unsupported("FK free contour programming"),
             b"PLANE" => super::plane::parse_plane(self, lx, t.start()),
             b"FUNCTION" => super::tcpm::parse_function(lx),

@@ -8,10 +8,10 @@ use super::parser::{
     W_AXES, W_COMP, W_FEED, W_M, W_POLAR, W_RADIUS, axis_of, describe, param_index, param_kind,
     required, set_once, text_of, unexpected, upper, value,
 };
-use super::table::TableOp;
 use super::words::split_q;
 use crate::diag::ProgramError;
-use crate::klartext::expr::Value;
+use crate::tnc::expr::Value;
+use crate::tnc::table::TableOp;
 
 /// Largest spline exponent the TNC accepts (`E±255`).
 const MAX_SPLINE_EXP: i32 = 255;
@@ -527,7 +527,7 @@ fn table_address(lx: &mut Lexer<'_>) -> PResult<(Value, (u32, u32))> {
 }
 
 /// The Q, QL or QR parameter of TABREAD and TABWRITE.
-fn table_param(lx: &mut Lexer<'_>) -> PResult<crate::klartext::expr::ParamRef> {
+fn table_param(lx: &mut Lexer<'_>) -> PResult<crate::tnc::expr::ParamRef> {
     let q = lx.next_token();
     let (u, n) = upper(lx.slice(q));
     match (q.kind, param_kind(&u[..n])) {

@@ -1,8 +1,8 @@
 //! Helpers for the executor's unit tests: a fresh folder and a block runner.
 
-use super::exec::Machine;
 use super::parser::Parser;
 use crate::op::SourceLoc;
+use crate::tnc::exec::Machine;
 use std::path::PathBuf;
 
 /// A fresh, empty folder for one test.

@@ -1,14 +1,14 @@
 //! Address words of path blocks (`X+10`, `IPA-Q3`, `DR+`, `RL`, `F MAX`, `M3`, …).
 
-use super::expr::{ParamKind, ParamRef, Value};
 use super::lexer::{Lexer, PlainWord, TokKind};
 use super::parser::{
     Coord, FeedWord, MAX_M, PResult, Parser, Val, W_APPR, W_AXES, W_COMP, W_DR, W_FEED, W_M,
     W_POLAR, W_RADIUS, Words, axis_of, param_index, text_of, unexpected, upper, value,
 };
 use crate::diag::ProgramError;
-use crate::klartext::expr::MAX_PARAM;
 use crate::op::CompSide;
+use crate::tnc::expr::MAX_PARAM;
+use crate::tnc::expr::{ParamKind, ParamRef, Value};
 
 impl Parser {
     /// Parses address words until the end of the block.

@@ -29,15 +29,15 @@
 
 use std::collections::VecDeque;
 
-use super::cycle::{CallKind, CycleValue, OldItem};
 use super::cycle_table::DatumTable;
+use super::cycle_words::{CallKind, CycleValue, OldItem};
 use super::exec::{ExecError, Flow, Machine, at, here};
+use super::expr::{ParamKind, ParamRef};
 use super::mfunc::MWords;
-use super::parser::Parser;
+use super::stmt::Parsed;
 use super::transform::Transform;
 use crate::cycles::{self, CycleContext, CycleError, CycleFeed, Move, P3, ParamKey, ParamSource};
 use crate::diag::ProgramError;
-use crate::klartext::expr::{ParamKind, ParamRef};
 use crate::op::{AxisLetter, CompSide, Feed, Op, OpKind, SourceLoc};
 
 /// The generator behind cycle calls (the real one, or a stand-in in tests).
@@ -227,7 +227,7 @@ impl Machine {
         &mut self,
         number: u32,
         sub: Option<u8>,
-        parsed: &Parser,
+        parsed: &Parsed,
         out: &mut VecDeque<Op>,
         loc: SourceLoc,
     ) -> Result<Flow, ExecError> {
@@ -478,7 +478,7 @@ impl Machine {
     fn new_def(
         &mut self,
         number: u32,
-        parsed: &Parser,
+        parsed: &Parsed,
         out: &mut VecDeque<Op>,
         loc: SourceLoc,
     ) -> Result<(), ExecError> {
@@ -676,7 +676,7 @@ impl Machine {
     pub(super) fn cycle_call(
         &mut self,
         kind: CallKind,
-        parsed: &Parser,
+        parsed: &Parsed,
         out: &mut VecDeque<Op>,
         loc: SourceLoc,
     ) -> Result<Flow, ExecError> {

@@ -18,7 +18,7 @@ use std::collections::VecDeque;
 use super::expr::{ParamKind, ParamRef, Params, Rpn};
 use super::geom::{self, P2};
 use super::mfunc::MWords;
-use super::parser::{Cond, Coord, FeedWord, LabelRef, Parser, Stmt, Words};
+use super::stmt::{Cond, Coord, FeedWord, LabelRef, Parsed, Stmt, Words};
 use super::tools::ToolTable;
 use crate::diag::ProgramError;
 use crate::op::{
@@ -364,7 +364,7 @@ impl Machine {
     pub fn exec(
         &mut self,
         stmt: &Stmt,
-        parsed: &Parser,
+        parsed: &Parsed,
         text: &[u8],
         loc: SourceLoc,
         out: &mut VecDeque<Op>,
@@ -392,7 +392,7 @@ impl Machine {
     fn exec_inner(
         &mut self,
         stmt: &Stmt,
-        parsed: &Parser,
+        parsed: &Parsed,
         text: &[u8],
         loc: SourceLoc,
         out: &mut VecDeque<Op>,

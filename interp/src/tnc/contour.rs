@@ -26,7 +26,7 @@
 
 use super::exec::{ExecError, Machine, at, here};
 use super::geom;
-use super::parser::{ApprKind, FeedWord, SplineWords, Stmt, Words};
+use super::stmt::{ApprKind, FeedWord, SplineWords, Stmt, Words};
 use crate::diag::ProgramError;
 use crate::op::{ApproachShape, AxisLetter, CompSide, Feed, Op, OpKind, Pose, SplineAxis};
 use std::collections::VecDeque;
@@ -250,7 +250,7 @@ impl Machine {
     ) -> Result<OpKind, ExecError> {
         let last_feed = self.last_feed;
         let value = |m: &Machine,
-                     word: Option<(crate::klartext::expr::Value, u32)>,
+                     word: Option<(super::expr::Value, u32)>,
                      name: &'static str|
          -> Result<(f64, u32), ExecError> {
             match word {

@@ -4,8 +4,8 @@
 use std::collections::VecDeque;
 
 use super::*;
-use crate::klartext::parser::Stmt;
 use crate::op::{Plane, Pose};
+use crate::tnc::stmt::Stmt;
 
 /// Stand-in generator: rapid to `[a, b, depth]` and back to where the call started, where
 /// depth is Q201 (current format) or the first value of sub-block 2 (old format).
@@ -47,7 +47,7 @@ fn run(blocks: &[&str]) -> Result<Vec<OpKind>, (usize, ProgramError)> {
 }
 
 fn run_on(m: &mut Machine, blocks: &[&str]) -> Result<Vec<OpKind>, (usize, ProgramError)> {
-    let mut p = Parser::default();
+    let mut p = Parsed::default();
     let mut q: VecDeque<Op> = VecDeque::new();
     let mut ops = Vec::new();
     for (i, b) in blocks.iter().enumerate() {

@@ -36,10 +36,10 @@
 use std::path::{Path, PathBuf};
 
 use super::exec::{ExecError, Machine, here};
-use super::parser::{ToolCall, ToolId};
+use super::expr::{ParamKind, ParamRef, Params, Value};
+use super::stmt::{ToolCall, ToolId};
 use super::tools::Tool;
 use crate::diag::ProgramError;
-use crate::klartext::expr::{ParamKind, ParamRef, Params, Value};
 use crate::op::{AxisLetter, OpKind, Plane, SpindleDir};
 
 /// Files and folders a program reads and writes: FN 16 output and FN 26–28 tables.

@@ -27,12 +27,12 @@
 use std::collections::VecDeque;
 
 use super::exec::{ExecError, Flow, Machine, at, here};
-use super::fk::{FkKind, FkWords};
 use super::fk_eqs::{Con, Ctx, Pt, unit};
 use super::fk_lm::{Lcg, determined, least_squares};
+use super::fk_words::{FkKind, FkWords};
 use super::geom::{self, P2};
 use super::mfunc::MWords;
-use super::parser::Words;
+use super::stmt::Words;
 use crate::diag::ProgramError;
 use crate::op::{Feed, Op, OpKind, SourceLoc};
 

@@ -32,7 +32,7 @@
 
 use super::exec::{ExecError, Flow, Machine, at};
 use super::expr::Value;
-use super::parser::{MAX_M, Parser, Stmt, Words};
+use super::stmt::{MAX_M, Parsed, Stmt, Words};
 use crate::diag::ProgramError;
 use crate::op::{CornerRule, Feed, MachineFunctionDef, MachineFunctionTime, OpKind, SpindleDir};
 
@@ -293,7 +293,7 @@ fn built_in(number: u32) -> bool {
 /// The words whose M functions a statement runs, if it runs any: path blocks, M-only and
 /// STOP blocks, SPL, APPR/DEP and cycle calls carry them in the block's words, FK blocks in
 /// the FK words. (Other statements leave the words of an earlier block in place.)
-fn m_words_of<'a>(stmt: &Stmt, parsed: &'a Parser) -> Option<&'a Words> {
+fn m_words_of<'a>(stmt: &Stmt, parsed: &'a Parsed) -> Option<&'a Words> {
     match stmt {
         Stmt::Misc
         | Stmt::Stop
@@ -326,7 +326,7 @@ impl Machine {
 
     /// Refuses, at its word, an M number of the statement that is neither built in nor one
     /// of the machine's functions. Runs before the statement, so nothing of the block runs.
-    pub(super) fn check_m_numbers(&self, stmt: &Stmt, parsed: &Parser) -> Result<(), ExecError> {
+    pub(super) fn check_m_numbers(&self, stmt: &Stmt, parsed: &Parsed) -> Result<(), ExecError> {
         let Some(w) = m_words_of(stmt, parsed) else {
             return Ok(());
         };
@@ -341,13 +341,13 @@ impl Machine {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_support::run;
     use crate::interpreter::Interpreter;
-    use crate::klartext::exec::Machine;
+    use crate::klartext::test_support::run;
     use crate::op::{
         AxisLetter, BUILT_IN_M_NUMBERS, MachineFunctionDef, MachineFunctionTime, Op, OpKind, Pose,
         SpindleDir,
     };
+    use crate::tnc::exec::Machine;
 
     /// M25 at block end with a stop and 2 s wait, M26 at block start without a stop.
     fn door() -> Vec<MachineFunctionDef> {

@@ -16,7 +16,7 @@ use std::collections::VecDeque;
 
 use super::exec::{ExecError, Flow, LabelKey, Machine, Pole, here};
 use super::mfunc::MWords;
-use super::parser::Words;
+use super::stmt::Words;
 use crate::cycles::{self, Contour, ContourSeg};
 use crate::diag::ProgramError;
 use crate::op::{CompSide, Feed, Op, OpKind, Pose, SourceLoc};

@@ -2,10 +2,10 @@
 //! data, directions, lengths, radius, auxiliary points and the closing condition.
 
 use super::exec::{ExecError, Machine, at, here};
-use super::fk::{FkKind, FkWords, RelRef};
 use super::fk_eqs::{Con, Dir, Pt};
+use super::fk_words::{FkKind, FkWords, RelRef};
 use super::geom::P2;
-use super::parser::Coord;
+use super::stmt::Coord;
 use crate::diag::ProgramError;
 
 impl Machine {

@@ -440,11 +440,11 @@ fn no_table() -> ProgramError {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::klartext::exec::Machine;
-    use crate::klartext::expr::ParamKind;
     use crate::klartext::parser::Parser;
     use crate::klartext::test_support::{folder, run};
     use crate::op::Pose;
+    use crate::tnc::exec::Machine;
+    use crate::tnc::expr::ParamKind;
 
     fn q(m: &Machine, n: u32) -> f64 {
         m.params.get(ParamRef {

@@ -12,9 +12,9 @@
 //!   (X, Y), the first at angle START;
 //! - `PITCHCIRC (X Y D START STEP NUM Z)`: NUM points from angle START, STEP degrees apart.
 
-use super::cycle::{PatternItem, PatternKind};
+use super::cycle_words::{PatternItem, PatternKind};
 use super::exec::{ExecError, Flow, Machine, at};
-use super::parser::Parser;
+use super::stmt::Parsed;
 use crate::cycles::P3;
 use crate::diag::ProgramError;
 
@@ -23,7 +23,7 @@ pub const MAX_PATTERN_POINTS: usize = 100_000;
 
 impl Machine {
     /// `PATTERN DEF`: computes the points of its elements.
-    pub(super) fn pattern_def(&mut self, parsed: &Parser) -> Result<Flow, ExecError> {
+    pub(super) fn pattern_def(&mut self, parsed: &Parsed) -> Result<Flow, ExecError> {
         let mut pts = Vec::new();
         for item in &parsed.cycle.pattern {
             self.pattern_points(item, &mut pts)?;

@@ -9,7 +9,7 @@ use super::exec::{
     C_RADIUS_TOLERANCE, ExecError, FULL_CIRCLE_EPS, MAX_IPA, Machine, Pole, at, here,
 };
 use super::geom;
-use super::parser::{Stmt, Words};
+use super::stmt::{Stmt, Words};
 use crate::diag::ProgramError;
 use crate::op::{AxisLetter, Feed, OpKind, Plane, Pose};
 

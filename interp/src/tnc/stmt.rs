@@ -1,12 +1,9 @@
 //! What the Klartext parser produces: the statement of a block ([`Stmt`], [`Block`]) and the
 //! words it keeps for the executor ([`Words`], [`ToolCall`], [`SplineWords`]).
 
+use super::expr::{ParamRef, Rpn, Value};
 use crate::diag::ProgramError;
-use crate::klartext::expr::{ParamRef, Value};
 use crate::op::{AxisLetter, CompSide};
-
-#[cfg(doc)]
-use super::parser::Parser;
 
 /// A coordinate word (`X+10`, `IX-2`, `PA+Q3`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -142,8 +139,8 @@ pub(crate) struct ToolCall {
     pub dr2: Option<Value>,
 }
 
-/// What a block does. The words of the block stay in the [`Parser`] ([`Parser::words`],
-/// [`Parser::tool`], [`Parser::code`]), so that this value is small.
+/// What a block does. The words of the block stay in the [`Parsed`] ([`Parsed::words`],
+/// [`Parsed::tool`], [`Parsed::code`]), so that this value is small.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) enum Stmt {
     /// Nothing to execute (empty line, comment, headline, number only).
@@ -179,13 +176,13 @@ pub(crate) enum Stmt {
     CircleTangent,
     /// `CP`.
     CirclePolar,
-    /// `Qn = …` / `FN 0..8, 13`: the formula is in [`Parser::code`].
+    /// `Qn = …` / `FN 0..8, 13`: the formula is in [`Parsed::code`].
     Assign {
         /// The parameter assigned.
         target: ParamRef,
     },
     /// `QSn = …`, `DECLARE STRING QSn = …`, `STRING FORMULA QSn = …`: the string formula
-    /// is in [`Parser::code`].
+    /// is in [`Parsed::code`].
     AssignString {
         /// The QS parameter assigned.
         target: u32,
@@ -264,7 +261,7 @@ pub(crate) enum Stmt {
     Chamfer,
     /// `CTP PR.. PA..`: tangential arc to a polar end point.
     CircleTangentPolar,
-    /// `SPL …`: spline; end point and coefficients in [`Parser::spline`].
+    /// `SPL …`: spline; end point and coefficients in [`Parsed::spline`].
     Spline,
     /// `APPR …` (approach) or `DEP …` (departure).
     ApproachDepart {
@@ -276,24 +273,24 @@ pub(crate) enum Stmt {
         polar: bool,
     },
     /// `CYCL DEF n …`: `sub` is `None` for the current format (Q assignments in
-    /// [`Parser::cycle`]), `Some(s)` for the old-format block `n.s` (items in
-    /// [`Parser::cycle`]).
+    /// [`Parsed::cycle`]), `Some(s)` for the old-format block `n.s` (items in
+    /// [`Parsed::cycle`]).
     CycleDef {
         /// Cycle number.
         number: u32,
         /// Sub-block number of the old format.
         sub: Option<u8>,
     },
-    /// `CYCL CALL [POS …|PAT] [F] [M…]`: words in [`Parser::words`].
+    /// `CYCL CALL [POS …|PAT] [F] [M…]`: words in [`Parsed::words`].
     CycleCall {
         /// Where the cycle is called.
-        kind: super::cycle::CallKind,
+        kind: super::cycle_words::CallKind,
     },
-    /// `PATTERN DEF …`: elements in [`Parser::cycle`].
+    /// `PATTERN DEF …`: elements in [`Parsed::cycle`].
     PatternDef,
-    /// An FK block (FPOL, FL, FLT, FC, FCT, FSELECT): words in [`Parser::fk`].
-    Fk(super::fk::FkKind),
-    /// `PLANE …`: words in [`Parser::plane`].
+    /// An FK block (FPOL, FL, FLT, FC, FCT, FSELECT): words in [`Parsed::fk`].
+    Fk(super::fk_words::FkKind),
+    /// `PLANE …`: words in [`Parsed::plane`].
     Plane,
     /// `FUNCTION TCPM …` (`on`) or `FUNCTION RESET TCPM`.
     Tcpm {
@@ -380,4 +377,33 @@ pub(crate) struct ParseError {
     pub number: Option<u64>,
     /// What is wrong.
     pub error: ProgramError,
+}
+
+/// The words of the last parsed block that its [`Stmt`] refers to, and the reused formula
+/// buffer. A front-end (Klartext: `klartext::parser`, TNC ISO: `iso`) fills it; the machine
+/// reads it when it executes the statement.
+#[derive(Debug, Default)]
+pub(crate) struct Parsed {
+    /// Postfix code of the last parsed assignment.
+    pub code: Vec<Rpn>,
+    /// Words of the last parsed path, CC, M, STOP or BLK FORM block.
+    pub words: Words,
+    /// Words of the last parsed TOOL CALL.
+    pub tool: ToolCall,
+    /// Coefficients of the last parsed SPL block.
+    pub spline: SplineWords,
+    /// Words of the last parsed cycle block (CYCL DEF, PATTERN DEF).
+    pub cycle: super::cycle_words::CycleWords,
+    /// Words of the last parsed FK block.
+    pub fk: super::fk_words::FkWords,
+    /// Words of the last parsed PLANE block.
+    pub plane: crate::tnc::plane::PlaneWords,
+    /// Byte range of the program name in the last parsed BEGIN PGM or END PGM block (empty
+    /// when the block names none).
+    pub program_name: (usize, usize),
+}
+
+/// The bytes of a block as text, one character per byte (latin-1).
+pub(crate) fn text_of(bytes: &[u8]) -> String {
+    bytes.iter().map(|&b| char::from(b)).collect()
 }

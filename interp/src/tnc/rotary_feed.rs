@@ -251,8 +251,8 @@ impl Machine {
 
 #[cfg(test)]
 mod tests {
-    use super::super::test_support::{klartext, mill5_ops as mill5};
     use crate::interpreter::Interpreter;
+    use crate::klartext::test_support::{klartext, mill5_ops as mill5};
     use crate::op::{AxisLetter, Feed, Op, OpKind, Pose};
     use std::f64::consts::PI;
 
