@@ -20,6 +20,7 @@ use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
 
+mod locate;
 mod ranges;
 mod tables;
 mod validate;
@@ -466,12 +467,19 @@ impl MachineConfig {
 
     /// Parses and validates machine TOML; `name` is used in messages.
     pub fn parse(name: &str, text: &str) -> Result<Self, ConfigError> {
-        let config: MachineConfig = toml::from_str(text).map_err(|e| ConfigError::Parse {
-            path: name.to_string(),
-            message: e.to_string().trim_end().to_string(),
+        let place = |at: Option<(usize, usize)>| match at {
+            Some((line, col)) => format!("{name}:{line}:{col}"),
+            None => name.to_string(),
+        };
+        let config: MachineConfig = toml::from_str(text).map_err(|e| {
+            let (at, message) = locate::unknown_key(text, e.to_string().trim_end());
+            ConfigError::Parse {
+                path: place(at),
+                message,
+            }
         })?;
         config.validate().map_err(|message| ConfigError::Invalid {
-            path: name.to_string(),
+            path: place(locate::locate(text, &message)),
             message,
         })?;
         Ok(config)

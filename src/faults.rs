@@ -50,19 +50,21 @@ pub const DEFAULT_JUMP_OFFSET: f64 = 1.0;
 pub const DEFAULT_STALL_SECONDS: f64 = 0.05;
 
 impl FaultKind {
+    /// Every kind with the name the command line and machine files use for it.
+    pub const NAMES: [(&'static str, FaultKind); 9] = [
+        ("drive", FaultKind::Drive),
+        ("comm", FaultKind::Comm),
+        ("noise", FaultKind::Noise),
+        ("stuck", FaultKind::Stuck),
+        ("limit", FaultKind::Limit),
+        ("estop", FaultKind::Estop),
+        ("stall", FaultKind::Stall),
+        ("spindle", FaultKind::Spindle),
+        ("jump", FaultKind::Jump),
+    ];
+
     fn parse(s: &str) -> Option<Self> {
-        Some(match s {
-            "drive" => FaultKind::Drive,
-            "comm" => FaultKind::Comm,
-            "noise" => FaultKind::Noise,
-            "stuck" => FaultKind::Stuck,
-            "limit" => FaultKind::Limit,
-            "estop" => FaultKind::Estop,
-            "stall" => FaultKind::Stall,
-            "spindle" => FaultKind::Spindle,
-            "jump" => FaultKind::Jump,
-            _ => return None,
-        })
+        Self::NAMES.iter().find(|(n, _)| *n == s).map(|(_, k)| *k)
     }
 }
 

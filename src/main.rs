@@ -75,8 +75,10 @@ enum Command {
         /// (says so when refused; the progress bar is left out).
         #[arg(long)]
         fifo: bool,
-        /// Inject a fault into the simulated axes: KIND[:AXIS]@SECONDS with KIND one of
-        /// drive, comm, noise, stuck, limit, estop (e.g. `drive:X@0.5`, `estop@1.2`).
+        /// Inject a fault into the simulated machine: KIND[:AXIS]@SECONDS with KIND one of
+        /// drive, comm, noise, stuck, limit, jump (these need an axis), estop, stall,
+        /// spindle (e.g. `drive:X@0.5`, `estop@1.2`, `stall@0.3`; durations, offsets and codes
+        /// take their defaults: a machine file's [[fault]] table sets them).
         #[arg(long = "fault", value_name = "SPEC")]
         faults: Vec<klar::faults::FaultConfig>,
     },
@@ -151,6 +153,8 @@ fn main() -> ExitCode {
                 .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
         )
         .with_writer(std::io::stderr)
+        // colour codes only for a terminal: a log file or a pipe gets plain text
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .init();
     let cli = Cli::parse();
     let quiet = cli.quiet;
@@ -228,10 +232,16 @@ fn load_machine_for(program: &Path, machine: Option<&Path>) -> Result<MachineCon
 fn load_machine(machine: Option<&Path>) -> Result<MachineConfig, ExitCode> {
     match machine {
         None => Ok(MachineConfig::builtin_mill()),
-        Some(p) => MachineConfig::load(p).map_err(|e| {
-            eprintln!("{e}");
-            ExitCode::FAILURE
-        }),
+        Some(p) => {
+            let config = MachineConfig::load(p).map_err(|e| {
+                eprintln!("{e}");
+                ExitCode::FAILURE
+            })?;
+            for notice in config.notices() {
+                eprintln!("warning: {}: {notice}", p.display());
+            }
+            Ok(config)
+        }
     }
 }
 
@@ -509,7 +519,9 @@ fn cmd_run(
             );
         }
     }
-    if !quiet {
+    // A run refused before its first servo cycle has nothing to sum up.
+    let refused = error.is_some() && report.cycles == 0;
+    if !quiet && !refused {
         say!("machine:      {}", config.name);
         for a in &report.start {
             let unit = if a.axis.is_rotary() { "deg" } else { "mm" };
@@ -690,6 +702,13 @@ fn cmd_serve(
         Ok(c) => c,
         Err(code) => return code,
     };
+    if !programs.is_dir() {
+        eprintln!(
+            "warning: no programs folder {} (name one with --programs DIR): the page offers \
+             no programs",
+            programs.display()
+        );
+    }
     let options = klar::serve::ServeOptions {
         listen,
         token: token.clone(),
@@ -729,7 +748,25 @@ fn cmd_serve(
     }
 }
 
+/// Checks that `path` can be written (before any work goes into what is to be written
+/// there), leaving the file system as it was.
+fn writable(path: &Path) -> std::io::Result<()> {
+    if path.exists() {
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map(drop)
+    } else {
+        std::fs::File::create(path)?;
+        std::fs::remove_file(path)
+    }
+}
+
 fn cmd_plot(program: &Path, output: &Path, machine: Option<&Path>, profile: bool) -> ExitCode {
+    if let Err(e) = writable(output) {
+        eprintln!("cannot write the plot to {}: {e}", output.display());
+        return ExitCode::FAILURE;
+    }
     let config = match load_machine_for(program, machine) {
         Ok(c) => c,
         Err(code) => return code,

@@ -196,7 +196,7 @@ fn bad_entries_are_refused_with_the_machine_file() {
         (
             "unknown_key",
             "[[m_function]]\nnumber = 25\nduration = 1.0\n".to_string(),
-            "unknown field `duration`",
+            "unknown key `duration`",
         ),
     ];
     for (name, extra, expected) in cases {

@@ -100,7 +100,7 @@ mod tests {
         let e = with("max_acceleration = 1e-300", "max_acceleration = 2000.0").unwrap_err();
         assert_eq!(
             e,
-            "m.toml: axis X: max_acceleration = 1e-300 is outside the range 0.1 … 10000000 \
+            "m.toml:14:1: axis X: max_acceleration = 1e-300 is outside the range 0.1 … 10000000 \
              mm/s² klar plans with"
         );
         let e = with("max_velocity = 1e-300", "max_velocity = 166.0").unwrap_err();

@@ -189,4 +189,35 @@ impl MachineConfig {
         }
         Ok(())
     }
+
+    /// Things in a valid machine file that a user should hear about before a run: today a
+    /// device given a real port while `simulate` is still set (klar then talks to the
+    /// simulation on a pseudo-terminal, not to the port).
+    pub fn notices(&self) -> Vec<String> {
+        let real = |port: &str| port != "simulated";
+        let mut out = Vec::new();
+        for a in &self.axes {
+            if let BackendConfig::Modbus(m) = &a.backend
+                && m.simulate.is_some()
+                && real(&m.servo.serial.port)
+            {
+                out.push(format!(
+                    "axis {}: `simulate` is set, so the drive is simulated: klar does not use \
+                     port {} (remove `simulate` to drive the device)",
+                    a.letter, m.servo.serial.port
+                ));
+            }
+        }
+        if let Some(SpindleBackendConfig::Modbus(m)) = self.spindle.as_ref().map(|s| &s.backend)
+            && m.simulate.is_some()
+            && real(&m.vfd.serial.port)
+        {
+            out.push(format!(
+                "spindle: `simulate` is set, so the VFD is simulated: klar does not use port {} \
+                 (remove `simulate` to drive the device)",
+                m.vfd.serial.port
+            ));
+        }
+        out
+    }
 }
