@@ -292,12 +292,28 @@ fn machine_values_outside_their_ranges_are_refused_by_key() {
         ),
     ];
     for (file, said) in &cases {
+        // The message starts at the key's line and column in the file.
+        let text = std::fs::read_to_string(file).expect("machine file");
+        let key = said
+            .split(" = ")
+            .next()
+            .and_then(|k| k.rsplit(['.', ' ']).next())
+            .expect("key");
+        let (row, col) = text
+            .lines()
+            .enumerate()
+            .find_map(|(i, l)| {
+                let c = l.find(&format!("{key} = "))?;
+                (l.contains("1e-") || l.contains("1e12")).then_some(())?;
+                Some((i + 1, c + 1))
+            })
+            .expect("changed line");
         for cmd in ["check", "run"] {
             let m = klar(&[cmd, &prog, "--machine", file]);
             assert_eq!(m.code, 1, "{cmd} {file}: {}", m.stderr);
             assert!(
                 m.stderr
-                    .contains(&format!("{file}: {said} klar plans with")),
+                    .contains(&format!("{file}:{row}:{col}: {said} klar plans with")),
                 "{cmd} {file}: {}",
                 m.stderr
             );
