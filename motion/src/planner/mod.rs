@@ -26,6 +26,7 @@
 //! step onto the point).
 
 mod commit;
+mod corner_stop;
 use commit::{path_feed, piece_error};
 mod cruise;
 mod deep;

@@ -39,13 +39,15 @@
 //! one over a run barely notices it. A polyline approximating a circle then becomes a curve of almost constant
 //! curvature, followed at the programmed feed.
 
+use super::corner_stop::{
+    BlendPart, SHARP_TURN, stop_is_faster, stop_saves_time, too_slow, turns_rotary,
+};
 use super::run;
 use super::smooth::{Stencil, split_point};
 use crate::blend::{ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, Line, Metric, PathPoint, Segment};
 use crate::limits::{Grip, Headroom, LimitError, PieceLimits, path_limits};
-use crate::profile::Ramp;
 use klar_interp::{Op, Pose, SourceLoc};
 
 /// Largest feed override, as a factor: path limits are prepared for it.
@@ -332,7 +334,7 @@ pub fn piece_limits(
 }
 
 /// Path limits of a whole element (`None` where none can be derived).
-fn element_limits(e: &Element, limits: &[Option<AxisLimits>; 9]) -> Option<PieceLimits> {
+pub(super) fn element_limits(e: &Element, limits: &[Option<AxisLimits>; 9]) -> Option<PieceLimits> {
     let (bounds, length) = (e.segment.bounds(), e.segment.length());
     piece_limits(&bounds, length, e.feed, limits, Headroom::Ample).ok()
 }
@@ -472,99 +474,6 @@ fn push_part(out: &mut Committed, e: &Element, from: f64, to: f64) {
     }
 }
 
-/// Share of its neighbours' speed or acceleration limit below which the blend of a sharp
-/// corner (turning more than [`SPLIT_MAX_ANGLE`]) is not worth it: the path stops exactly
-/// at the corner instead.
-const SLOW_BLEND: f64 = 0.1;
-
-/// True when a blend's limits fall so far below those of the elements it joins that an
-/// exact stop serves better (a blend through a sharp corner in a tight band).
-fn too_slow(
-    blend: &Quintic,
-    length: f64,
-    feed: Option<f64>,
-    cur: &Element,
-    next: &Element,
-    limits: &[Option<AxisLimits>; 9],
-) -> bool {
-    let Ok(b) = piece_limits(&blend.bounds(), length, feed, limits, Headroom::Ample) else {
-        return true;
-    };
-    let (Some(l), Some(r)) = (element_limits(cur, limits), element_limits(next, limits)) else {
-        return true;
-    };
-    b.velocity < SLOW_BLEND * l.velocity.min(r.velocity)
-        || b.acceleration < SLOW_BLEND * l.acceleration.min(r.acceleration)
-}
-
-/// True when the element turns a rotary axis along its linear motion.
-fn turns_rotary(e: &Element) -> bool {
-    e.segment.metric() == Metric::Linear && Metric::Rotary.norm(&e.segment.bounds().d1) > 0.0
-}
-
-/// Share by which the rotary axes must at least slow down the way through a blend (its
-/// estimated time against that of the same blend with the linear axes' limits alone)
-/// before an exact stop may replace it.
-const ROTARY_COST: f64 = 2.0;
-
-/// True when stopping at the corner takes less time than slowing down into the blend and
-/// speeding up out of it, and the rotary axes are what makes the blend slow (a corner next
-/// to a move that turns a rotary axis, whose turn per millimetre can put the blend's limits
-/// far below its neighbours').
-///
-/// The estimate: from the speed on `cur` (its top speed, at most the programmed feed) down
-/// to the blend's top speed (with `headroom`, as it will be committed) and on to the speed
-/// on `next`: braking with the acceleration of `cur` and the lower of the two jerks (the
-/// look-ahead brakes into a piece with its jerk), speeding up with the acceleration of
-/// `next` and again the lower jerk; against braking `cur` to rest and speeding `next` up
-/// from rest with their own limits. It is rough for corners that slow the path down to
-/// nearly nothing anyway (those [`too_slow`] settles): the blend must also take at least
-/// [`ROTARY_COST`] times as long as it would if only the linear axes limited it.
-fn stop_is_faster(
-    blend: &Quintic,
-    length: f64,
-    feed: Option<f64>,
-    headroom: Headroom,
-    (cur, next): (&Element, &Element),
-    limits: &[Option<AxisLimits>; 9],
-) -> bool {
-    let time = |from: f64, to: f64, accel: f64, jerk: f64| {
-        Ramp::new(from, 0.0, to, accel, jerk).duration()
-    };
-    // (through the blend, stopping) with the bounds as `keep` leaves them.
-    let estimate = |keep: fn(AxisBounds) -> AxisBounds| -> Option<(f64, f64)> {
-        let get = |b: AxisBounds, len: f64, feed: Option<f64>, h: Headroom| {
-            piece_limits(&keep(b), len, feed, limits, h).ok()
-        };
-        let b = get(blend.bounds(), length, feed, headroom)?;
-        let (lc, ln) = (cur.segment.length(), next.segment.length());
-        let l = get(cur.segment.bounds(), lc, cur.feed, Headroom::Ample)?;
-        let r = get(next.segment.bounds(), ln, next.feed, Headroom::Ample)?;
-        let speed = |top: f64, e: &Element| e.feed.map_or(top, |f| top.min(f));
-        let (vl, vr) = (speed(l.velocity, cur), speed(r.velocity, next));
-        let low = b.velocity.min(vl).min(vr);
-        let through = time(vl, low, l.acceleration, l.jerk.min(b.jerk))
-            + time(low, vr, r.acceleration, r.jerk.min(b.jerk));
-        let stop = time(vl, 0.0, l.acceleration, l.jerk) + time(0.0, vr, r.acceleration, r.jerk);
-        Some((through, stop))
-    };
-    let Some((through, stop)) = estimate(|b| b) else {
-        return true;
-    };
-    let Some((linear, _)) = estimate(without_rotary) else {
-        return true;
-    };
-    through > stop && through > ROTARY_COST * linear
-}
-
-/// The bounds with those of the rotary axes left out.
-fn without_rotary(mut b: AxisBounds) -> AxisBounds {
-    for &i in Metric::Rotary.axes() {
-        (b.d1[i], b.d2[i], b.d3[i], b.wave[i]) = (0.0, 0.0, 0.0, 0.0);
-    }
-    b
-}
-
 /// The split point to give `mid` at its midpoint when it can become one between `prev`
 /// and `next` ([`split_point`]); `tp` and `tm` are the unit tangents at the end of `prev`
 /// and the start of `mid`, `turn` the angle between them.
@@ -697,20 +606,36 @@ fn try_corner(
             {
                 return None;
             }
-            let mut out = Committed::default();
-            push_part(&mut out, cur, cur.trim, len - dl);
-            let shape = Shape::Blend(curve);
-            for (from, to, before) in blend_parts(length, parts, dl, dr, cur.feed != next.feed) {
+            // A blend's parts: at most `BLEND_PARTS`, one of them cut at the joint.
+            let mut cut = [None; BLEND_PARTS + 1];
+            let split_feed = cur.feed != next.feed;
+            for (slot, (from, to, before)) in cut
+                .iter_mut()
+                .zip(blend_parts(length, parts, dl, dr, split_feed))
+            {
                 let (feed, loc) = match before {
                     Some(true) => (cur.feed, cur.loc),
                     Some(false) => (next.feed, next.loc),
                     None => (feed, next.loc),
                 };
+                *slot = Some((BlendPart { from, to, feed }, loc));
+            }
+            let weighed = cut.iter().flatten().map(|(part, _)| part);
+            if !dense
+                && theta >= SHARP_TURN
+                && stop_saves_time(&curve, weighed, headroom, (cur, next), (dl, dr), limits)
+            {
+                return None;
+            }
+            let mut out = Committed::default();
+            push_part(&mut out, cur, cur.trim, len - dl);
+            let shape = Shape::Blend(curve);
+            for (part, loc) in cut.into_iter().flatten() {
                 out.pieces.push(NewPiece {
                     shape: shape.clone(),
-                    offset: from,
-                    length: to - from,
-                    feed,
+                    offset: part.from,
+                    length: part.to - part.from,
+                    feed: part.feed,
                     loc,
                     headroom,
                 });

@@ -1,0 +1,113 @@
+//! Sharp corners: an exact stop where the blend inside the band would crawl, a blend where
+//! it pays. A 90° stepover (a pass along X at F2400, then up in Z at F400), as parallel
+//! finishing turns from each pass into the stepover, judged from the commanded trace against
+//! the closed-form time of stopping at the corner.
+
+mod common;
+
+use common::*;
+use klar_interp::{Feed, Pose};
+
+/// Bench limits: 100 mm/s, 1000 mm/s², 1e5 mm/s³ per axis.
+const V: f64 = 100.0;
+const A: f64 = 1000.0;
+const J: f64 = 1e5;
+
+/// Duration of the time-optimal jerk-limited change of speed between rest and `v` (at rest
+/// in acceleration at both ends; with or without a stretch at the acceleration limit).
+fn ramp_time(v: f64) -> f64 {
+    if v >= A * A / J {
+        v / A + A / J
+    } else {
+        2.0 * (v / J).sqrt()
+    }
+}
+
+/// Time-optimal jerk-limited time of a straight stretch of `length` at feed `v`, from rest
+/// to rest, when it is long enough to reach `v`: the ramps are symmetric in time, so each
+/// covers `v · t / 2` and loses half its duration against running at `v`.
+fn stretch_time(length: f64, v: f64) -> f64 {
+    length / v + ramp_time(v)
+}
+
+/// Distance in X Y Z from `p` to the segment from `a` to `b`.
+fn to_segment(p: &Pose, a: &Pose, b: &Pose) -> f64 {
+    let ab: Vec<f64> = (0..3).map(|i| b.0[i] - a.0[i]).collect();
+    let ap: Vec<f64> = (0..3).map(|i| p.0[i] - a.0[i]).collect();
+    let ab2: f64 = ab.iter().map(|x| x * x).sum();
+    let t = (ap.iter().zip(&ab).map(|(x, y)| x * y).sum::<f64>() / ab2).clamp(0.0, 1.0);
+    (0..3)
+        .map(|i| (ap[i] - t * ab[i]).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// Two lines from the origin: `first` at `f1`, then on to `second` at `f2` (mm/s), on a
+/// machine with path tolerance `tol`. Returns the run after checking every axis's limits
+/// and the distance from the programmed contour, with the closest approach to the corner.
+fn corner(first: Pose, f1: f64, second: Pose, f2: f64, tol: f64) -> (Run, f64) {
+    let p0 = Pose::xyz(0.0, 0.0, 0.0);
+    let ops = vec![
+        line(1, p0, first, Feed::Rate(f1)),
+        line(2, first, second, Feed::Rate(f2)),
+    ];
+    let mut cfg = config(limits_xyz(V, A, J));
+    cfg.tolerance = tol;
+    let r = run(cfg.clone(), p0, ops);
+    assert_within_limits(&cfg, &p0, &r.samples, 1.01);
+    let mut closest = f64::INFINITY;
+    for s in &r.samples {
+        let off = to_segment(&s.pose, &p0, &first).min(to_segment(&s.pose, &first, &second));
+        assert!(
+            off <= tol + 1e-9,
+            "tolerance {tol}: {off} mm off the contour"
+        );
+        closest = closest.min(linear_distance(&s.pose, &first));
+    }
+    let end = r.samples.last().expect("samples").pose;
+    assert!(linear_distance(&end, &second) < 1e-9);
+    (r, closest)
+}
+
+/// The stepover: 10 mm along X at F2400, then 1 mm up in Z at F400.
+fn stepover(tol: f64) -> (Run, f64) {
+    let (corner_at, top) = (Pose::xyz(10.0, 0.0, 0.0), Pose::xyz(10.0, 0.0, 1.0));
+    corner(corner_at, 40.0, top, 400.0 / 60.0, tol)
+}
+
+#[test]
+fn a_stepover_in_a_tight_band_stops_at_the_corner() {
+    // In a 0.01 mm band a curvature-continuous blend of the 90° corner allows about 1.3 mm/s
+    // (the jerk its curvature causes, v³·dκ/ds); stopping and speeding up again loses less.
+    let (r, closest) = stepover(0.01);
+    assert!(
+        closest < 1e-6,
+        "the path passes {closest} mm from the corner"
+    );
+    // Stopped at the corner, the fastest motion is the two stretches, each from rest to
+    // rest: 10/40 + 0.05 s and 1/6.667 + 0.01633 s.
+    let bound = stretch_time(10.0, 40.0) + stretch_time(1.0, 400.0 / 60.0);
+    assert!((bound - 0.466330).abs() < 1e-5, "{bound}");
+    let t = r.samples.last().map_or(0.0, |s| s.t);
+    // Each stretch ends on the next period at most.
+    assert!(
+        t >= bound - 1e-9 && t <= bound + 0.002,
+        "{t} s against the exact stop's {bound} s"
+    );
+}
+
+#[test]
+fn a_right_angle_in_a_wide_band_keeps_its_blend() {
+    // In a 0.5 mm band the blend of a 90° corner between two lines at F600 reaches 2.8 mm
+    // into each, and its curvature (about 0.5/mm at most) lets the path cross it at the
+    // feed: no time lost, where a stop loses a ramp down and up (10 ms each way).
+    let (corner_at, end) = (Pose::xyz(10.0, 0.0, 0.0), Pose::xyz(10.0, 10.0, 0.0));
+    let (r, closest) = corner(corner_at, 10.0, end, 10.0, 0.5);
+    assert!(
+        closest > 0.05,
+        "the path passes {closest} mm from the corner"
+    );
+    let stop = 2.0 * stretch_time(10.0, 10.0);
+    let t = r.samples.last().map_or(0.0, |s| s.t);
+    assert!(t < stop - 0.01, "{t} s against the exact stop's {stop} s");
+}
