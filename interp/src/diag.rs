@@ -242,6 +242,9 @@ pub enum ProgramError {
     /// A machining cycle cannot be generated (unknown number, parameter errors).
     #[error("{0}")]
     Cycle(crate::cycles::CycleError),
+    /// A touch-probe cycle failed (nothing touched, already in contact, bad parameters).
+    #[error("{0}")]
+    Probe(crate::probe::ProbeError),
     /// A cycle call without a defined machining cycle.
     #[error("{0} without a defined machining cycle: program CYCL DEF first")]
     NoCycle(&'static str),

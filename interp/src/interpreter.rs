@@ -351,6 +351,39 @@ impl Interpreter {
         self
     }
 
+    /// Gives the interpreter a touch probe: `TCH PROBE` cycles ask `probe` where the stylus
+    /// touches and use `data` (ball radius, clearance, probing distance, feeds). Without one
+    /// they are refused. Klartext and TNC ISO programs.
+    pub fn with_probe(
+        mut self,
+        data: crate::probe::ProbeData,
+        probe: Box<dyn crate::probe::Probe>,
+    ) -> Self {
+        self.target().set_probe(data, probe);
+        self
+    }
+
+    /// The value of Q parameter `n` now (0 when never set): the results of touch-probe cycles
+    /// (Q150 and up) for whoever runs the program.
+    pub fn q(&self, n: u32) -> f64 {
+        self.target_ref()
+            .params
+            .value(crate::tnc::expr::Value::Param {
+                param: crate::tnc::expr::ParamRef {
+                    kind: crate::tnc::expr::ParamKind::Q,
+                    index: n,
+                },
+                negate: false,
+            })
+    }
+
+    /// The preset table as the program has left it so far (touch-probe cycles write it), and
+    /// the row active now.
+    pub fn presets(&self) -> (Option<&DatumTable>, Option<i64>) {
+        let m = self.target_ref();
+        (m.cyc.presets.as_ref(), m.cyc.active_preset)
+    }
+
     /// Tells the interpreter the travel `[min, max]` (mm, machine coordinates) of the linear
     /// machine axis `axis` (X, Y or Z; other letters are ignored): `M140 MB MAX` retracts along
     /// the tool axis until the first linear axis reaches its travel limit.

@@ -19,6 +19,7 @@ mod interpreter;
 pub mod iso;
 pub(crate) mod klartext;
 pub mod op;
+pub mod probe;
 mod source;
 pub(crate) mod tnc;
 
@@ -33,6 +34,7 @@ pub use op::{
     ApproachShape, AxisLetter, CompSide, CornerRule, Feed, Op, OpKind, Plane, Pose, SourceLoc,
     SplineAxis,
 };
+pub use probe::{Probe, ProbeData};
 pub use source::MAX_BLOCK_BYTES;
 pub use tnc::contour::SPLINE_START_TOLERANCE;
 pub use tnc::cycle_table::{DatumTable, DatumTableError};

@@ -133,7 +133,7 @@ fn code_end(text: &[u8], from: usize) -> usize {
 }
 
 /// Splits an old-format sub-block into items.
-fn old_items(text: &[u8], from: usize, out: &mut Vec<OldItem>) -> PResult<()> {
+pub(super) fn old_items(text: &[u8], from: usize, out: &mut Vec<OldItem>) -> PResult<()> {
     out.clear();
     let end = code_end(text, from);
     let body = text.get(..end).unwrap_or(text);
@@ -262,7 +262,7 @@ fn q_value(text: &[u8], j: &mut usize, q: u32, at: usize) -> PResult<CycleValue>
 }
 
 /// The number after `CYCL DEF`: (number, sub-block) with `sub` for the old `n.s` form.
-fn cycle_number(text: &[u8], i: &mut usize) -> PResult<(u32, Option<u8>)> {
+pub(super) fn cycle_number(text: &[u8], i: &mut usize) -> PResult<(u32, Option<u8>)> {
     skip_blanks(text, i);
     let start = *i;
     let mut n: u64 = 0;
@@ -324,7 +324,7 @@ fn keyword_before_number(text: &[u8], i: &mut usize, word: &[u8]) -> bool {
 }
 
 /// Skips a keyword (case-insensitive) at `i` when it is there.
-fn keyword(text: &[u8], i: &mut usize, word: &[u8]) -> bool {
+pub(super) fn keyword(text: &[u8], i: &mut usize, word: &[u8]) -> bool {
     skip_word(text, i, word, |c| c.is_ascii_alphanumeric())
 }
 

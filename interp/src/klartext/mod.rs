@@ -8,6 +8,7 @@ pub(crate) mod formula;
 pub(crate) mod lexer;
 pub(crate) mod parser;
 pub(crate) mod plane;
+pub(crate) mod probe;
 pub(crate) mod strings;
 pub(crate) mod structure;
 pub(crate) mod tcpm;

@@ -394,7 +394,7 @@ impl Parser {
             b"FK" => unsupported("FK free contour programming"),
             b"PLANE" => super::plane::parse_plane(self, lx, t.start()),
             b"FUNCTION" => super::tcpm::parse_function(lx),
-            b"TCH" => unsupported("TCH PROBE"),
+            b"TCH" => self.tch_probe(lx, t.end()),
             b"DECLARE" => self.declare(lx),
             b"SEL" => unsupported("SEL"),
             b"PATTERN" => self.pattern_def(lx.text(), t.end()),

@@ -76,6 +76,8 @@ pub(crate) struct CycleState {
     pub datums: Option<DatumTable>,
     /// Preset table for cycle 247.
     pub presets: Option<DatumTable>,
+    /// The preset table row active now (start preset or cycle 247), if any.
+    pub active_preset: Option<i64>,
     /// Points of the last PATTERN DEF, program coordinates `[a, b, surface]`.
     pub pattern: Vec<P3>,
     /// Contour labels of the last cycle 14.
@@ -98,6 +100,7 @@ impl Default for CycleState {
             modal_call: false,
             datums: None,
             presets: None,
+            active_preset: None,
             pattern: Vec::new(),
             contours: Vec::new(),
             p20: None,
@@ -154,10 +157,13 @@ impl Machine {
         let Some(row) = self.cyc.presets.as_ref().and_then(|t| t.row(nr)).copied() else {
             return false;
         };
+        let rot = self.cyc.presets.as_ref().map_or(0.0, |t| t.rot(nr));
         let machine = self.cyc.xf.map_point(&self.pos);
         for (p, v) in self.cyc.xf.preset.iter_mut().zip(row.iter()) {
             *p = v.unwrap_or(0.0);
         }
+        self.cyc.xf.basic_rot = rot;
+        self.cyc.active_preset = Some(nr);
         self.pos = self.cyc.xf.unmap_point(&machine);
         self.cyc.identity = self.cyc.xf.is_identity();
         true
@@ -192,7 +198,7 @@ impl Machine {
 
     /// Makes `new` the active transform: maps what is queued with the old one, and
     /// re-expresses the position in the new system.
-    fn set_transform(&mut self, new: Transform, out: &mut VecDeque<Op>, loc: SourceLoc) {
+    pub(super) fn set_transform(&mut self, new: Transform, out: &mut VecDeque<Op>, loc: SourceLoc) {
         let old = self.cyc.xf;
         if old == new {
             return;
@@ -218,7 +224,7 @@ impl Machine {
         }
     }
 
-    fn item_value(&self, it: &OldItem) -> Option<f64> {
+    pub(super) fn item_value(&self, it: &OldItem) -> Option<f64> {
         it.value.map(|v| self.params.value(v))
     }
 
@@ -475,13 +481,13 @@ impl Machine {
         Ok(())
     }
 
-    fn new_def(
+    /// The Q assignments of a current-format definition, evaluated; each is also set as
+    /// the Q parameter of its number (as the TNC does).
+    pub(super) fn read_q_def(
         &mut self,
         number: u32,
         parsed: &Parsed,
-        out: &mut VecDeque<Op>,
-        loc: SourceLoc,
-    ) -> Result<(), ExecError> {
+    ) -> Result<CycleDef, ExecError> {
         let mut def = CycleDef {
             number,
             params: Vec::with_capacity(parsed.cycle.q.len()),
@@ -509,6 +515,17 @@ impl Machine {
             def.params.retain(|(k, _)| *k != ParamKey::Q(e.q));
             def.params.push((ParamKey::Q(e.q), v));
         }
+        Ok(def)
+    }
+
+    fn new_def(
+        &mut self,
+        number: u32,
+        parsed: &Parsed,
+        out: &mut VecDeque<Op>,
+        loc: SourceLoc,
+    ) -> Result<(), ExecError> {
+        let def = self.read_q_def(number, parsed)?;
         match number {
             247 => {
                 let n = def.get(ParamKey::Q(339)).unwrap_or(0.0);
@@ -528,6 +545,8 @@ impl Machine {
                         for (p, v) in xf.preset.iter_mut().zip(row.iter()) {
                             *p = v.unwrap_or(0.0);
                         }
+                        xf.basic_rot = t.rot(n as i64);
+                        self.cyc.active_preset = Some(n as i64);
                     }
                     None if n == 0.0 => {}
                     None => {

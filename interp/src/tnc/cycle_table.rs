@@ -11,7 +11,8 @@
 //!
 //! The first line names the table and its unit (`MM` or `INCH`; INCH values are converted to
 //! mm). The second line names the columns; `NR` is the row number, the axis columns are
-//! `X Y Z A B C U V W`, other columns (`DOC`, …) are ignored. A row whose fields split at
+//! `X Y Z A B C U V W`; a preset table's `ROT` column is the basic rotation about the tool
+//! axis (degrees); other columns (`DOC`, …) are ignored. A row whose fields split at
 //! blanks into as many fields as the header has columns is read field by field; otherwise the
 //! fields are cut at the header's column positions (tables written by the control are
 //! aligned, and a blank field means "not set"). `[END]` ends the table.
@@ -45,6 +46,8 @@ pub enum DatumTableError {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct DatumTable {
     rows: BTreeMap<i64, [Option<f64>; 9]>,
+    /// The `ROT` column (basic rotation, degrees) where it has a value.
+    rot: BTreeMap<i64, f64>,
 }
 
 fn number(s: &str) -> Option<f64> {
@@ -89,6 +92,7 @@ impl DatumTable {
             .position(|(_, n)| n == "NR")
             .ok_or(DatumTableError::NoHeader)?;
         let mut rows = BTreeMap::new();
+        let mut rot = BTreeMap::new();
         for (ln, line) in lines {
             let t = line.trim();
             if t.eq_ignore_ascii_case("[END]") || t.eq_ignore_ascii_case("END") {
@@ -120,6 +124,13 @@ impl DatumTable {
                 .ok_or_else(|| bad(nr_col, nr_text))? as i64;
             let mut row = [None; 9];
             for (k, (_, name)) in cols.iter().enumerate() {
+                if name == "ROT" {
+                    let f = fields.get(k).map(String::as_str).unwrap_or("").trim();
+                    if !f.is_empty() {
+                        rot.insert(nr, number(f).ok_or_else(|| bad(k, f))?);
+                    }
+                    continue;
+                }
                 let mut ch = name.chars();
                 let (Some(c), None) = (ch.next(), ch.next()) else {
                     continue;
@@ -136,12 +147,31 @@ impl DatumTable {
             }
             rows.insert(nr, row);
         }
-        Ok(DatumTable { rows })
+        Ok(DatumTable { rows, rot })
     }
 
     /// The values of row `nr` (axes without a value are `None`), if the row exists.
     pub fn row(&self, nr: i64) -> Option<&[Option<f64>; 9]> {
         self.rows.get(&nr)
+    }
+
+    /// The basic rotation (`ROT` column, degrees) of row `nr`; 0 when not set.
+    pub fn rot(&self, nr: i64) -> f64 {
+        self.rot.get(&nr).copied().unwrap_or(0.0)
+    }
+
+    /// Writes row `nr` (created when missing): the axis values given replace the row's,
+    /// the others stay; `rot` replaces the basic rotation when given.
+    pub fn write(&mut self, nr: i64, values: &[Option<f64>; 9], rot: Option<f64>) {
+        let row = self.rows.entry(nr).or_insert([None; 9]);
+        for (slot, v) in row.iter_mut().zip(values) {
+            if v.is_some() {
+                *slot = *v;
+            }
+        }
+        if let Some(r) = rot {
+            self.rot.insert(nr, r);
+        }
     }
 
     /// Number of rows.

@@ -185,13 +185,15 @@ pub(crate) struct Machine {
     /// Files the program reads and writes (FN 16 output, FN 26–28 tables).
     pub(super) io: super::system::ProgramIo,
     /// Cycle definitions, transforms and cycle calls.
-    pub(super) cyc: super::cycle_exec::CycleState,
+    pub(crate) cyc: super::cycle_exec::CycleState,
     /// Tilted working plane and TCPM.
     pub(super) tilt: super::plane::PlaneState,
     /// FK free contour elements waiting for data, FPOL pole, solved FK elements.
     pub(super) fk: super::fk_solve::FkState,
     /// Machine-dependent M functions from the machine configuration.
     pub(super) machine_functions: Vec<crate::op::MachineFunctionDef>,
+    /// The touch probe and the state of an old-format probing cycle.
+    pub(super) probe: super::probe_exec::ProbeState,
 }
 
 /// An execution error located at a word of the block.
@@ -243,6 +245,7 @@ impl Machine {
             tilt: Default::default(),
             fk: Default::default(),
             machine_functions: Vec::new(),
+            probe: Default::default(),
         }
     }
 
@@ -383,7 +386,15 @@ impl Machine {
         {
             r = Err(e);
         }
-        if r.is_err() {
+        // a probing move that found nothing has run its distance before the program stops
+        let probed = matches!(
+            r,
+            Err((
+                _,
+                ProgramError::Probe(crate::probe::ProbeError::NotReached { .. })
+            ))
+        );
+        if r.is_err() && !probed {
             out.truncate(mark);
         }
         r
@@ -501,6 +512,7 @@ impl Machine {
             Stmt::CycleDef { number: 19, sub } => self.cycle19(*sub, parsed, out, loc),
             Stmt::CycleDef { number, sub } => self.cycle_def(*number, *sub, parsed, out, loc),
             Stmt::Plane => self.plane_block(parsed, out, loc),
+            Stmt::TouchProbe { number, sub } => self.touch_probe(*number, *sub, parsed, out, loc),
             Stmt::Tcpm { on, mode } => Ok(self.tcpm_block(*on, *mode, out, loc)),
             Stmt::CycleCall { kind } => self.cycle_call(*kind, parsed, out, loc),
             Stmt::PatternDef => self.pattern_def(parsed),

@@ -24,6 +24,8 @@ pub(crate) mod plane;
 pub(crate) mod plane_math;
 pub(crate) mod plane_output;
 pub(crate) mod plane_turn;
+pub(crate) mod probe_cycles;
+pub(crate) mod probe_exec;
 pub(crate) mod retract;
 pub(crate) mod rotary_feed;
 pub(crate) mod stmt;

@@ -281,6 +281,14 @@ pub(crate) enum Stmt {
         /// Sub-block number of the old format.
         sub: Option<u8>,
     },
+    /// `TCH PROBE n …`: a touch-probe cycle, DEF-active. `sub` as for [`Stmt::CycleDef`]
+    /// (old format `0.0`/`0.1`, `1.0`…`1.2`; current format with Q assignments).
+    TouchProbe {
+        /// Cycle number.
+        number: u32,
+        /// Sub-block number of the old format.
+        sub: Option<u8>,
+    },
     /// `CYCL CALL [POS …|PAT] [F] [M…]`: words in [`Parsed::words`].
     CycleCall {
         /// Where the cycle is called.

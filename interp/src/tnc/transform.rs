@@ -6,12 +6,13 @@
 //! motion are mapped. A program point `p` becomes the machine point
 //!
 //! ```text
-//! x = preset + shift + Mirror · Rotation · (centre + Scale · (p − centre))
+//! x = preset + Basic · (shift + Mirror · Rotation · (centre + Scale · (p − centre)))
 //! ```
 //!
 //! i.e. the point is first scaled about the scaling centre (the datum for cycle 11, CCX/CCY
 //! for cycle 26), then rotated in the working plane about the datum, then mirrored about the
-//! datum, then shifted by the datum shift and the active preset. The order is fixed: it is the
+//! datum, then shifted by the datum shift, turned by the preset's basic rotation about the
+//! tool axis Z (written by touch-probe cycle 400) and shifted by the active preset. The order is fixed: it is the
 //! chain "datum shift, then mirror, then rotation, then scaling" of the TNC's coordinate
 //! transformation cycles, each acting in the system the previous ones set up, whatever order
 //! the cycles were defined in.
@@ -38,6 +39,9 @@ pub(crate) struct Transform {
     pub preset: [f64; 9],
     /// Datum shift (cycle 7), per axis.
     pub shift: [f64; 9],
+    /// Basic rotation of the active preset about Z, degrees (touch-probe cycle 400, the
+    /// preset table's ROT column).
+    pub basic_rot: f64,
     /// Mirrored axes X, Y, Z (cycle 8).
     pub mirror: [bool; 3],
     /// Rotation about the tool axis of `plane`, degrees (cycle 10).
@@ -56,12 +60,23 @@ impl Default for Transform {
         Transform {
             preset: [0.0; 9],
             shift: [0.0; 9],
+            basic_rot: 0.0,
             mirror: [false; 3],
             rot: 0.0,
             plane: Plane::XY,
             scale: [1.0; 3],
             centre: [0.0; 3],
         }
+    }
+}
+
+/// Turns `q` (X, Y, Z) about Z by `deg` degrees (counter-clockwise seen from +Z).
+fn turn_xy(q: &mut [f64; 3], deg: f64) {
+    if deg != 0.0 {
+        let (s, c) = deg.to_radians().sin_cos();
+        let (x, y) = (q[0], q[1]);
+        q[0] = x * c - y * s;
+        q[1] = x * s + y * c;
     }
 }
 
@@ -78,6 +93,7 @@ impl Transform {
             && self.shift.iter().all(|v| *v == 0.0)
             && !self.mirror.iter().any(|m| *m)
             && self.rot == 0.0
+            && self.basic_rot == 0.0
             && self.scale.iter().all(|f| *f == 1.0)
     }
 
@@ -95,6 +111,7 @@ impl Transform {
             *x *= f;
         }
         self.rotate_mirror(&mut q);
+        turn_xy(&mut q, self.basic_rot);
         q
     }
 
@@ -122,9 +139,13 @@ impl Transform {
             *v = self.centre[i] + self.scale[i] * (p.0[i] - self.centre[i]);
         }
         self.rotate_mirror(&mut q);
+        for (i, v) in q.iter_mut().enumerate() {
+            *v += self.shift[i];
+        }
+        turn_xy(&mut q, self.basic_rot);
         out[..3].copy_from_slice(&q);
         for (i, x) in out.iter_mut().enumerate() {
-            *x += self.shift[i] + self.preset[i];
+            *x += self.preset[i] + if i < 3 { 0.0 } else { self.shift[i] };
         }
         Pose(out)
     }
@@ -134,9 +155,13 @@ impl Transform {
     pub fn unmap_point(&self, x: &Pose) -> Pose {
         let mut out = x.0;
         for (i, v) in out.iter_mut().enumerate() {
-            *v -= self.shift[i] + self.preset[i];
+            *v -= self.preset[i] + if i < 3 { 0.0 } else { self.shift[i] };
         }
         let mut q = [out[0], out[1], out[2]];
+        turn_xy(&mut q, -self.basic_rot);
+        for (i, v) in q.iter_mut().enumerate() {
+            *v -= self.shift[i];
+        }
         for (v, m) in q.iter_mut().zip(self.mirror) {
             if m {
                 *v = -*v;
@@ -217,6 +242,11 @@ impl Transform {
                     return Err(format!(
                         "an arc in the {plane:?} plane cannot be turned by a rotation in the {:?} plane",
                         self.plane
+                    ));
+                }
+                if self.basic_rot != 0.0 && *plane != Plane::XY {
+                    return Err(format!(
+                        "an arc in the {plane:?} plane cannot be turned by the basic rotation about Z"
                     ));
                 }
                 self.plane_factor(*plane, "an arc")?;

@@ -1,0 +1,459 @@
+//! The current-format touch-probe cycles: 400 (basic rotation from two points on a
+//! straight edge), 410/411 (preset in the centre of a rectangular pocket / stud), 412/413
+//! (preset in the centre of a bore / circular stud) and 431 (measure a plane).
+//!
+//! Each cycle's rules, as klar applies them from the TNC 640 touch-probe manual:
+//! - **400**: touch points 1 (Q263/Q264) and 2 (Q265/Q266) lie on one edge; Q272=1 means the
+//!   edge runs along the reference axis (the probe moves along the minor axis), Q272=2 along
+//!   the minor axis; Q267 (+1/−1) is the direction of the probing moves. The angle of the
+//!   edge against its axis is Q150; the basic rotation becomes that angle minus the nominal
+//!   angle Q307 (added to the basic rotation already active) and goes to preset row Q305
+//!   (0: the active preset, which turns at once).
+//! - **410/411**: the centre Q321/Q322 and side lengths Q323 (reference axis) and Q324 (minor
+//!   axis) are nominal values; the four touch points lie on the two lines through the centre
+//!   parallel to the axes. 410 probes from inside outward, starting from the centre when the
+//!   pocket is too small for the clearance; 411 probes from outside inward. Results: Q151 and
+//!   Q152 the centre, Q154 and Q155 the side lengths.
+//! - **412/413**: Q321/Q322 nominal centre, Q262 nominal diameter, Q325 angle of the first
+//!   touch point, Q247 step between touch points (default: a full circle shared evenly by the
+//!   Q423 points, 4 unless given), Q365 how the probe travels between points at measuring
+//!   height (0: straight, 1: on an arc about the nominal centre). The circle through the
+//!   touch points (least squares for four or more) gives Q151/Q152 the centre and Q153 the
+//!   diameter.
+//! - 410 … 413 with Q381=1 also probe the probe axis at Q382/Q383 (nominal height Q384) and
+//!   set the datum of that axis to Q333. The measured centre becomes Q331/Q332.
+//! - **431**: three points (Q263/Q264/Q294, Q265/Q266/Q295, Q296/Q297/Q298) probed downward
+//!   along the tool axis; Q173 … Q175 the heights measured, Q158/Q159 the projection angles
+//!   about the reference and the minor axis, Q170 … Q172 the spatial angles A, B, C of the
+//!   plane (C is 0: the plane is given by its normal alone).
+
+use std::collections::VecDeque;
+
+use super::cycle_exec::CycleDef;
+use super::exec::{ExecError, Machine};
+use super::probe_exec::{P3, Run, perr};
+use crate::cycles::{ParamKey, ParamSource};
+use crate::op::{Op, OpKind};
+use crate::probe::ProbeError;
+
+/// The circle through the points, least squares (algebraic fit): centre and radius, `None`
+/// for fewer than three points or points on one line.
+pub(crate) fn fit_circle(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
+    if pts.len() < 3 {
+        return None;
+    }
+    // centred on the mean for a well-conditioned system
+    let n = pts.len() as f64;
+    let mu = pts
+        .iter()
+        .fold([0.0, 0.0], |s, p| [s[0] + p[0] / n, s[1] + p[1] / n]);
+    // minimise Σ (x² + y² + D x + E y + F)²: normal equations
+    let mut m = [[0.0; 3]; 3];
+    let mut r = [0.0; 3];
+    for p in pts {
+        let (x, y) = (p[0] - mu[0], p[1] - mu[1]);
+        let row = [x, y, 1.0];
+        let z = -(x * x + y * y);
+        for i in 0..3 {
+            for j in 0..3 {
+                m[i][j] += row[i] * row[j];
+            }
+            r[i] += row[i] * z;
+        }
+    }
+    let det3 = |a: &[[f64; 3]; 3]| {
+        a[0][0] * (a[1][1] * a[2][2] - a[1][2] * a[2][1])
+            - a[0][1] * (a[1][0] * a[2][2] - a[1][2] * a[2][0])
+            + a[0][2] * (a[1][0] * a[2][1] - a[1][1] * a[2][0])
+    };
+    let d = det3(&m);
+    if d.abs() < 1e-12 {
+        return None;
+    }
+    let solve = |k: usize| {
+        let mut a = m;
+        for i in 0..3 {
+            a[i][k] = r[i];
+        }
+        det3(&a) / d
+    };
+    let (dd, ee, ff) = (solve(0), solve(1), solve(2));
+    let c = [-dd / 2.0, -ee / 2.0];
+    let rr = c[0] * c[0] + c[1] * c[1] - ff;
+    (rr > 0.0).then(|| ([c[0] + mu[0], c[1] + mu[1]], rr.sqrt()))
+}
+
+/// Degrees in (−90°, 90°]: the angle of an undirected line.
+fn line_angle(deg: f64) -> f64 {
+    let a = deg.rem_euclid(180.0);
+    if a > 90.0 { a - 180.0 } else { a }
+}
+
+impl Machine {
+    /// A required parameter of `def`.
+    fn need(&self, def: &CycleDef, q: u32) -> Result<f64, ExecError> {
+        def.get(ParamKey::Q(q))
+            .map(|v| v * self.unit_of(q))
+            .ok_or(perr(ProbeError::Missing {
+                cycle: def.number,
+                q,
+            }))
+    }
+
+    /// An optional parameter of `def`.
+    fn opt(&self, def: &CycleDef, q: u32, default: f64) -> f64 {
+        def.get(ParamKey::Q(q))
+            .map_or(default, |v| v * self.unit_of(q))
+    }
+
+    /// The length factor of parameter `q` (angles, counts and switches are not lengths).
+    fn unit_of(&self, q: u32) -> f64 {
+        match q {
+            247 | 272 | 267 | 301 | 303 | 305 | 307 | 325 | 365 | 381 | 423 => 1.0,
+            _ => self.unit,
+        }
+    }
+
+    /// Runs a current-format touch-probe cycle.
+    pub(super) fn probe_cycle(
+        &mut self,
+        def: &CycleDef,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        match def.number {
+            400 => self.cycle400(def, run, out),
+            410 | 411 => self.cycle41x_rect(def, run, out),
+            412 | 413 => self.cycle41x_circle(def, run, out),
+            431 => self.cycle431(def, run, out),
+            n => Err(perr(ProbeError::Unknown(n))),
+        }
+    }
+
+    /// The clearance before a touch point: the probe's, the cycle's Q320 and the ball.
+    fn lead(&self, def: &CycleDef) -> f64 {
+        self.probe.data.set_up + self.opt(def, 320, 0.0) + self.probe.data.radius
+    }
+
+    fn cycle400(
+        &mut self,
+        def: &CycleDef,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let cycle = def.number;
+        let p1 = [self.need(def, 263)?, self.need(def, 264)?];
+        let p2 = [self.need(def, 265)?, self.need(def, 266)?];
+        let axis = self.opt(def, 272, 1.0);
+        let sign = self.opt(def, 267, 1.0);
+        if !(axis == 1.0 || axis == 2.0) || !(sign == 1.0 || sign == -1.0) {
+            return Err(perr(ProbeError::Bad {
+                cycle,
+                what: "Q272 must be 1 or 2 and Q267 +1 or -1".into(),
+            }));
+        }
+        let h = self.need(def, 261)?;
+        let clear = self.need(def, 260)?;
+        let high = self.opt(def, 301, 1.0) == 1.0;
+        let dir = if axis == 1.0 {
+            [0.0, sign, 0.0]
+        } else {
+            [sign, 0.0, 0.0]
+        };
+        let lead = self.lead(def);
+        let mut s = [[0.0; 2]; 2];
+        for (k, p) in [p1, p2].iter().enumerate() {
+            run.point = k as u32 + 1;
+            let start = [p[0] - dir[0] * lead, p[1] - dir[1] * lead];
+            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            let t = self.touch_surface(dir, run, out)?;
+            s[k] = [t[0], t[1]];
+        }
+        self.up_to(clear, run, out);
+        let raw = (s[1][1] - s[0][1]).atan2(s[1][0] - s[0][0]).to_degrees();
+        let measured = line_angle(if axis == 1.0 { raw } else { raw - 90.0 });
+        self.set_q(150, measured);
+        let nominal = self.opt(def, 307, 0.0);
+        let mut xf = self.cyc.xf;
+        xf.basic_rot += measured - nominal;
+        let rot = xf.basic_rot;
+        self.write_preset(cycle, def, xf, &[None; 9], Some(rot), out, run.loc)
+    }
+
+    fn cycle41x_rect(
+        &mut self,
+        def: &CycleDef,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let inside = def.number == 410;
+        let c = [self.need(def, 321)?, self.need(def, 322)?];
+        let half = [self.need(def, 323)? / 2.0, self.need(def, 324)? / 2.0];
+        let h = self.need(def, 261)?;
+        let clear = self.need(def, 260)?;
+        let high = self.opt(def, 301, 1.0) == 1.0;
+        let lead = self.lead(def);
+        // touch points: −ref, −minor, +ref, +minor (outward normals of the sides)
+        let normals = [[-1.0, 0.0], [0.0, -1.0], [1.0, 0.0], [0.0, 1.0]];
+        let mut hits = [0.0; 4];
+        for (k, nrm) in normals.iter().enumerate() {
+            run.point = k as u32 + 1;
+            let i = k % 2;
+            let side = [c[0] + nrm[0] * half[0], c[1] + nrm[1] * half[1]];
+            let (start, dir) = if inside {
+                let back = (half[i] - lead).max(0.0);
+                (
+                    [c[0] + nrm[0] * back, c[1] + nrm[1] * back],
+                    [nrm[0], nrm[1], 0.0],
+                )
+            } else {
+                (
+                    [side[0] + nrm[0] * lead, side[1] + nrm[1] * lead],
+                    [-nrm[0], -nrm[1], 0.0],
+                )
+            };
+            if !inside && !high && k > 0 {
+                // around the corner between the previous side and this one
+                let prev = normals[k - 1];
+                let corner = [
+                    c[0] + (prev[0] + nrm[0]) * (half[0] + lead),
+                    c[1] + (prev[1] + nrm[1]) * (half[1] + lead),
+                ];
+                let p = self.plane_pos();
+                let f = self.positioning();
+                self.probe_line([corner[0], corner[1], p[2]], f, run, out);
+            }
+            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            let t = self.touch_surface(dir, run, out)?;
+            hits[k] = t[i];
+        }
+        self.tool_axis_datum(def, run, out)?;
+        self.up_to(clear, run, out);
+        let centre = [(hits[0] + hits[2]) / 2.0, (hits[1] + hits[3]) / 2.0];
+        self.set_q(151, centre[0] / self.unit);
+        self.set_q(152, centre[1] / self.unit);
+        self.set_q(154, (hits[2] - hits[0]) / self.unit);
+        self.set_q(155, (hits[3] - hits[1]) / self.unit);
+        self.centre_datum(def, centre, run, out)
+    }
+
+    fn cycle41x_circle(
+        &mut self,
+        def: &CycleDef,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let cycle = def.number;
+        let inside = cycle == 412;
+        let c = [self.need(def, 321)?, self.need(def, 322)?];
+        let r = self.need(def, 262)? / 2.0;
+        let start_angle = self.opt(def, 325, 0.0);
+        let count = self.opt(def, 423, 4.0);
+        if !(count == 3.0 || count == 4.0) {
+            return Err(perr(ProbeError::Bad {
+                cycle,
+                what: format!("Q423={count}: 3 or 4 touch points"),
+            }));
+        }
+        let step = self.opt(def, 247, 360.0 / count);
+        if step == 0.0 || step.abs() > 120.0 {
+            return Err(perr(ProbeError::Bad {
+                cycle,
+                what: format!("Q247={step}: the step angle is 0 < |Q247| ≤ 120°"),
+            }));
+        }
+        let h = self.need(def, 261)?;
+        let clear = self.need(def, 260)?;
+        let high = self.opt(def, 301, 1.0) == 1.0;
+        let on_arc = self.opt(def, 365, 1.0) == 1.0;
+        let lead = self.lead(def);
+        let ring = if inside {
+            (r - lead).max(0.0)
+        } else {
+            r + lead
+        };
+        let mut pts = Vec::with_capacity(4);
+        for k in 0..count as usize {
+            run.point = k as u32 + 1;
+            let ang = (start_angle + step * k as f64).to_radians();
+            let u = [ang.cos(), ang.sin()];
+            let start = [c[0] + u[0] * ring, c[1] + u[1] * ring];
+            if k > 0 && !high && on_arc && ring > 0.0 {
+                // along the circle about the nominal centre to the next start point
+                let from = self.pos;
+                let to = self.pose_at([start[0], start[1], self.plane_pos()[2]]);
+                out.push_back(Op {
+                    kind: OpKind::Arc {
+                        from,
+                        to,
+                        center: c,
+                        plane: self.plane,
+                        sweep: step,
+                        feed: self.positioning(),
+                    },
+                    loc: run.loc,
+                });
+                self.pos = to;
+            }
+            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            let dir = if inside {
+                [u[0], u[1], 0.0]
+            } else {
+                [-u[0], -u[1], 0.0]
+            };
+            let t = self.touch_surface(dir, run, out)?;
+            pts.push([t[0], t[1]]);
+        }
+        self.tool_axis_datum(def, run, out)?;
+        self.up_to(clear, run, out);
+        let (centre, radius) = fit_circle(&pts).ok_or(perr(ProbeError::Bad {
+            cycle,
+            what: "the touch points do not make a circle".into(),
+        }))?;
+        self.set_q(151, centre[0] / self.unit);
+        self.set_q(152, centre[1] / self.unit);
+        self.set_q(153, 2.0 * radius / self.unit);
+        self.centre_datum(def, centre, run, out)
+    }
+
+    /// Q381=1: probes the tool axis at Q382/Q383 downward from above Q384 and keeps the
+    /// surface height for the datum (Q333).
+    fn tool_axis_datum(
+        &mut self,
+        def: &CycleDef,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        self.probe.axis_hit = None;
+        if self.opt(def, 381, 0.0) != 1.0 {
+            return Ok(());
+        }
+        let p = [self.need(def, 382)?, self.need(def, 383)?];
+        let nominal = self.need(def, 384)?;
+        let clear = self.need(def, 260)?;
+        run.point += 1;
+        let lead = self.lead(def);
+        self.go_to_point(p, nominal + lead, clear, true, run, out);
+        let t = self.touch_surface([0.0, 0.0, -1.0], run, out)?;
+        self.probe.axis_hit = Some(t[2]);
+        Ok(())
+    }
+
+    /// Writes the datum of a centre cycle (Q331/Q332, and Q333 after Q381=1).
+    fn centre_datum(
+        &mut self,
+        def: &CycleDef,
+        centre: [f64; 2],
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let new: P3 = [
+            self.opt(def, 331, 0.0),
+            self.opt(def, 332, 0.0),
+            self.opt(def, 333, 0.0),
+        ];
+        let w = self.probe.axis_hit.take();
+        self.set_datum(
+            def,
+            [Some(centre[0]), Some(centre[1]), w],
+            new,
+            out,
+            run.loc,
+        )
+    }
+
+    fn cycle431(
+        &mut self,
+        def: &CycleDef,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let pts = [
+            [
+                self.need(def, 263)?,
+                self.need(def, 264)?,
+                self.need(def, 294)?,
+            ],
+            [
+                self.need(def, 265)?,
+                self.need(def, 266)?,
+                self.need(def, 295)?,
+            ],
+            [
+                self.need(def, 296)?,
+                self.need(def, 297)?,
+                self.need(def, 298)?,
+            ],
+        ];
+        let clear = self.need(def, 260)?;
+        let lead = self.lead(def);
+        let mut s = [[0.0; 3]; 3];
+        for (k, p) in pts.iter().enumerate() {
+            run.point = k as u32 + 1;
+            self.go_to_point([p[0], p[1]], p[2] + lead, clear, true, run, out);
+            s[k] = self.touch_surface([0.0, 0.0, -1.0], run, out)?;
+        }
+        self.up_to(clear, run, out);
+        let d1 = [s[1][0] - s[0][0], s[1][1] - s[0][1], s[1][2] - s[0][2]];
+        let d2 = [s[2][0] - s[0][0], s[2][1] - s[0][1], s[2][2] - s[0][2]];
+        let mut n = [
+            d1[1] * d2[2] - d1[2] * d2[1],
+            d1[2] * d2[0] - d1[0] * d2[2],
+            d1[0] * d2[1] - d1[1] * d2[0],
+        ];
+        let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        if len < 1e-12 || n[2].abs() < 1e-12 {
+            return Err(perr(ProbeError::Bad {
+                cycle: def.number,
+                what: "the three touch points do not span a plane across the tool axis".into(),
+            }));
+        }
+        if n[2] < 0.0 {
+            n = n.map(|v| -v);
+        }
+        let n = n.map(|v| v / len);
+        // plane w = w0 + gu·u + gv·v with normal (−gu, −gv, 1)
+        let (gu, gv) = (-n[0] / n[2], -n[1] / n[2]);
+        self.set_q(158, gv.atan().to_degrees());
+        self.set_q(159, (-gu).atan().to_degrees());
+        // A about the reference axis then B about the minor axis turn the tool axis onto n
+        self.set_q(170, (-n[1]).asin().to_degrees());
+        self.set_q(171, n[0].atan2(n[2]).to_degrees());
+        self.set_q(172, 0.0);
+        for (k, q) in [173, 174, 175].iter().enumerate() {
+            self.set_q(*q, s[k][2] / self.unit);
+        }
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn circle_fit_is_exact_for_points_on_a_circle() {
+        let (c, r) = ([3.2_f64, -1.7_f64], 12.5_f64);
+        for start in [0.0_f64, 17.0, 200.0] {
+            let pts: Vec<[f64; 2]> = (0..4)
+                .map(|k| {
+                    let a = (start + 90.0 * k as f64).to_radians();
+                    [c[0] + r * a.cos(), c[1] + r * a.sin()]
+                })
+                .collect();
+            let (fc, fr) = fit_circle(&pts).expect("a circle");
+            assert!((fc[0] - c[0]).abs() < 1e-9 && (fc[1] - c[1]).abs() < 1e-9);
+            assert!((fr - r).abs() < 1e-9);
+            let three = fit_circle(&pts[..3]).expect("three points");
+            assert!((three.1 - r).abs() < 1e-9);
+        }
+        assert!(fit_circle(&[[0.0, 0.0], [1.0, 1.0], [2.0, 2.0]]).is_none());
+    }
+
+    #[test]
+    fn line_angles_fold_into_a_half_turn() {
+        assert!((line_angle(181.5) - 1.5).abs() < 1e-12);
+        assert!((line_angle(-178.5) - 1.5).abs() < 1e-12);
+        assert!((line_angle(90.0) - 90.0).abs() < 1e-12);
+    }
+}

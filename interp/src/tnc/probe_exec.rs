@@ -1,0 +1,492 @@
+//! Touch-probe cycles (`TCH PROBE`) on the TNC machine: the probing move, the positioning
+//! between touch points, and the writes of results and presets. The cycles themselves are in
+//! [`super::probe_cycles`].
+//!
+//! Rules taken from the TNC 640 touch-probe manual, in klar's words:
+//! - touch-probe cycles act when they are defined: no `CYCL CALL`;
+//! - the controlled point of the probe is the centre of its stylus ball; a measuring height
+//!   (Q261) is where that centre stands, and every measured value is the workpiece surface,
+//!   i.e. the trigger position moved on by the ball radius in the probing direction;
+//! - a probing move starts the set-up clearance (the probe's own plus the cycle's Q320) and
+//!   the ball radius before the nominal touch point, and runs at most the probe's probing
+//!   distance; a move that finds nothing ends the program with "touch point inaccessible",
+//!   a ball that touches before it moves with "stylus already in contact";
+//! - after each touch the probe returns to where its probing move started; between touch
+//!   points it travels at the measuring height, or at the clearance height Q260 when Q301=1;
+//!   the first touch point is always reached over the clearance height, and at the end the
+//!   probe returns to the clearance height;
+//! - cycles 0 and 1 also leave the trigger position (ball centre, program coordinates) in
+//!   Q115 … Q117;
+//! - a preset found by a cycle goes to row Q305 of the preset table when Q303=1 (Q305=0: the
+//!   active preset, which then acts at once; a row that is the active one acts at once as
+//!   well). The preset is chosen so that the measured point reads Q331/Q332 (Q333 in the
+//!   probe axis) afterwards.
+//!
+//! Not modelled: the tilted working plane (probing is refused in it), probing in the datum
+//! table (Q303=0), and the stylus deflection after the trigger (the simulated axes stop on
+//! the trigger point, which the interpreter knows before the move).
+
+use std::collections::VecDeque;
+
+use super::cycle_exec::CycleDef;
+use super::cycle_words::OldItem;
+use super::exec::{ExecError, Flow, Machine, here};
+use super::expr::{ParamKind, ParamRef};
+use super::stmt::Parsed;
+use crate::cycles::{ParamKey, ParamSource};
+use crate::diag::ProgramError;
+use crate::op::{AxisLetter, Feed, Op, OpKind, Pose, SourceLoc};
+use crate::probe::{Probe, ProbeData, ProbeError};
+
+/// A point in the working plane's axes: first axis, second axis, tool axis (mm).
+pub(super) type P3 = [f64; 3];
+
+/// The probe as the machine knows it.
+#[derive(Debug, Default)]
+pub(crate) struct ProbeState {
+    /// Answers the probing moves; `None`: the machine has no probe.
+    pub probe: Option<Box<dyn Probe>>,
+    /// Ball radius, clearance, distance and feeds.
+    pub data: ProbeData,
+    /// The head block of an old-format cycle 0 or 1: cycle, result parameter, axis,
+    /// direction sign.
+    old: Option<OldHead>,
+    /// Height of the surface found by the probe-axis touch of a centre cycle (Q381=1).
+    pub axis_hit: Option<f64>,
+}
+
+/// What an old-format head block (`0.0`, `1.0`, `1.1`) said.
+#[derive(Debug, Clone, Copy)]
+struct OldHead {
+    cycle: u32,
+    result: Option<ParamRef>,
+    /// Probing direction in X, Y, Z (program coordinates), once known.
+    dir: Option<P3>,
+}
+
+pub(super) fn perr(e: ProbeError) -> ExecError {
+    here(ProgramError::Probe(e))
+}
+
+/// Where one touch-probe cycle is: its number and the touch point it works on.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Run {
+    pub cycle: u32,
+    pub point: u32,
+    pub loc: SourceLoc,
+}
+
+impl Machine {
+    /// Gives the machine a probe and its data.
+    pub fn set_probe(&mut self, data: ProbeData, probe: Box<dyn Probe>) {
+        self.probe.data = data;
+        self.probe.probe = Some(probe);
+    }
+
+    /// `TCH PROBE n …`.
+    pub(super) fn touch_probe(
+        &mut self,
+        number: u32,
+        sub: Option<u8>,
+        parsed: &Parsed,
+        out: &mut VecDeque<Op>,
+        loc: SourceLoc,
+    ) -> Result<Flow, ExecError> {
+        if self.probe.probe.is_none() {
+            return Err(perr(ProbeError::NoProbe(number)));
+        }
+        if !self.tilt.identity {
+            return Err(perr(ProbeError::Bad {
+                cycle: number,
+                what: "probing in a tilted working plane is not supported yet".into(),
+            }));
+        }
+        let run = Run {
+            cycle: number,
+            point: 1,
+            loc,
+        };
+        match sub {
+            Some(s) => self.old_probe(number, s, &parsed.cycle.items, run, out)?,
+            None => {
+                let def = self.read_q_def(number, parsed)?;
+                self.probe_cycle(&def, run, out)?;
+            }
+        }
+        Ok(Flow::Continue)
+    }
+
+    /// The working-plane coordinates of the position.
+    pub(super) fn plane_pos(&self) -> P3 {
+        let (a, b, n) = self.plane.axes();
+        [self.pos[a], self.pos[b], self.pos[n]]
+    }
+
+    /// The position with its working-plane coordinates replaced by `p`.
+    pub(super) fn pose_at(&self, p: P3) -> Pose {
+        let (a, b, n) = self.plane.axes();
+        let mut q = self.pos;
+        (q[a], q[b], q[n]) = (p[0], p[1], p[2]);
+        q
+    }
+
+    /// A straight move to `to` (working-plane coordinates).
+    pub(super) fn probe_line(&mut self, to: P3, feed: Feed, run: Run, out: &mut VecDeque<Op>) {
+        let from = self.pos;
+        let to = self.pose_at(to);
+        if from != to {
+            out.push_back(Op {
+                kind: OpKind::Line { from, to, feed },
+                loc: run.loc,
+            });
+        }
+        self.pos = to;
+    }
+
+    /// The feed of positioning moves.
+    pub(super) fn positioning(&self) -> Feed {
+        self.probe
+            .data
+            .positioning_feed
+            .map_or(Feed::Rapid, |f| Feed::Rate(f / 60.0))
+    }
+
+    /// Goes to `start` (in-plane) at height `h`: over the clearance height `clear` when
+    /// `high`, else at the height the probe stands at.
+    pub(super) fn go_to_point(
+        &mut self,
+        start: [f64; 2],
+        h: f64,
+        clear: f64,
+        high: bool,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) {
+        let p = self.plane_pos();
+        let f = self.positioning();
+        if high {
+            let top = p[2].max(clear);
+            self.probe_line([p[0], p[1], top], f, run, out);
+            self.probe_line([start[0], start[1], top], f, run, out);
+        } else {
+            self.probe_line([start[0], start[1], p[2]], f, run, out);
+        }
+        self.probe_line([start[0], start[1], h], f, run, out);
+    }
+
+    /// Raises the probe to the clearance height `clear` (when below it).
+    pub(super) fn up_to(&mut self, clear: f64, run: Run, out: &mut VecDeque<Op>) {
+        let p = self.plane_pos();
+        if p[2] < clear {
+            let f = self.positioning();
+            self.probe_line([p[0], p[1], clear], f, run, out);
+        }
+    }
+
+    /// Probes from where the probe stands along the unit direction `dir` (working-plane
+    /// coordinates) and returns to the start. Returns the trigger position of the ball centre.
+    pub(super) fn probe_from_here(
+        &mut self,
+        dir: P3,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<P3, ExecError> {
+        let start = self.plane_pos();
+        let d = self.probe.data.distance;
+        let end = [
+            start[0] + dir[0] * d,
+            start[1] + dir[1] * d,
+            start[2] + dir[2] * d,
+        ];
+        let xyz = |p: &Pose| [p[AxisLetter::X], p[AxisLetter::Y], p[AxisLetter::Z]];
+        let m_start = self.cyc.xf.map_point(&self.pose_at(start));
+        let m_end = self.cyc.xf.map_point(&self.pose_at(end));
+        let radius = self.probe.data.radius;
+        let blank = self.blank;
+        let hit = match self.probe.probe.as_mut() {
+            Some(p) => p.touch(xyz(&m_start), xyz(&m_end), radius, blank.as_ref()),
+            None => return Err(perr(ProbeError::NoProbe(run.cycle))),
+        };
+        let feed = Feed::Rate(self.probe.data.feed / 60.0);
+        let Some(h) = hit else {
+            // the probe runs its whole distance, then the program stops
+            self.probe_line(end, feed, run, out);
+            return Err(perr(ProbeError::NotReached {
+                cycle: run.cycle,
+                point: run.point,
+                distance: d,
+            }));
+        };
+        let moved = (0..3)
+            .map(|i| (h[i] - xyz(&m_start)[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if moved < 1e-9 {
+            return Err(perr(ProbeError::AlreadyInContact {
+                cycle: run.cycle,
+                point: run.point,
+            }));
+        }
+        let mut m_hit = m_start;
+        (
+            m_hit[AxisLetter::X],
+            m_hit[AxisLetter::Y],
+            m_hit[AxisLetter::Z],
+        ) = (h[0], h[1], h[2]);
+        let p_hit = self.cyc.xf.unmap_point(&m_hit);
+        let (a, b, n) = self.plane.axes();
+        let trigger = [p_hit[a], p_hit[b], p_hit[n]];
+        self.probe_line(trigger, feed, run, out);
+        let back = self.positioning();
+        self.probe_line(start, back, run, out);
+        Ok(trigger)
+    }
+
+    /// Probes along `dir` from where the probe stands; the surface point touched.
+    pub(super) fn touch_surface(
+        &mut self,
+        dir: P3,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<P3, ExecError> {
+        let t = self.probe_from_here(dir, run, out)?;
+        let r = self.probe.data.radius;
+        Ok([t[0] + dir[0] * r, t[1] + dir[1] * r, t[2] + dir[2] * r])
+    }
+
+    /// Sets Q parameter `n`.
+    pub(super) fn set_q(&mut self, n: u32, v: f64) {
+        self.params.set(
+            ParamRef {
+                kind: ParamKind::Q,
+                index: n,
+            },
+            v,
+        );
+    }
+
+    /// Writes a measured datum: the program point `measured` (working-plane coordinates;
+    /// `None` for axes not measured) shall read `new` afterwards. Row Q305 of the preset table
+    /// when Q303=1 (see the module doc).
+    pub(super) fn set_datum(
+        &mut self,
+        def: &CycleDef,
+        measured: [Option<f64>; 3],
+        new: P3,
+        out: &mut VecDeque<Op>,
+        loc: SourceLoc,
+    ) -> Result<(), ExecError> {
+        let cycle = def.number;
+        let transfer = def.get(ParamKey::Q(303)).unwrap_or(1.0);
+        if transfer == 0.0 {
+            return Err(perr(ProbeError::Bad {
+                cycle,
+                what: "Q303=0 (datum in the datum table) is not supported yet; Q303=1 writes the preset table".into(),
+            }));
+        }
+        let (a, b, n) = self.plane.axes();
+        let axes = [a, b, n];
+        let here_p = self.pose_at([
+            measured[0].unwrap_or(0.0),
+            measured[1].unwrap_or(0.0),
+            measured[2].unwrap_or(0.0),
+        ]);
+        let there_p = self.pose_at(new);
+        let m_here = self.cyc.xf.map_point(&here_p);
+        let m_there = self.cyc.xf.map_point(&there_p);
+        let mut xf = self.cyc.xf;
+        let mut written = [None; 9];
+        for (k, ax) in axes.iter().enumerate() {
+            if measured[k].is_some() {
+                let i = ax.index();
+                xf.preset[i] += m_here[*ax] - m_there[*ax];
+                written[i] = Some(xf.preset[i]);
+            }
+        }
+        self.write_preset(cycle, def, xf, &written, None, out, loc)
+    }
+
+    /// Writes `xf`'s preset (`values`, basic rotation `rot`) into row Q305 and makes it act
+    /// when that row is the active preset.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn write_preset(
+        &mut self,
+        cycle: u32,
+        def: &CycleDef,
+        xf: super::transform::Transform,
+        values: &[Option<f64>; 9],
+        rot: Option<f64>,
+        out: &mut VecDeque<Op>,
+        loc: SourceLoc,
+    ) -> Result<(), ExecError> {
+        let q305 = def.get(ParamKey::Q(305)).unwrap_or(0.0);
+        if q305.fract() != 0.0 || !(0.0..=99_999.0).contains(&q305) {
+            return Err(perr(ProbeError::Bad {
+                cycle,
+                what: format!("Q305={q305} is not a preset table row"),
+            }));
+        }
+        let row = if q305 == 0.0 {
+            self.cyc.active_preset
+        } else {
+            Some(q305 as i64)
+        };
+        let active = q305 == 0.0 || row == self.cyc.active_preset;
+        match (&mut self.cyc.presets, row) {
+            (Some(t), Some(nr)) => t.write(nr, values, rot),
+            (None, Some(nr)) => {
+                return Err(here(ProgramError::NoTable {
+                    table: "preset",
+                    row: nr as f64,
+                    key: "preset_table",
+                }));
+            }
+            // no table: the active preset exists only in the run
+            (_, None) => {}
+        }
+        if active {
+            self.set_transform(xf, out, loc);
+        }
+        Ok(())
+    }
+
+    /// Cycles 0 and 1 in the old block format.
+    fn old_probe(
+        &mut self,
+        number: u32,
+        sub: u8,
+        items: &[OldItem],
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let bad = |what: &str| {
+            perr(ProbeError::Bad {
+                cycle: number,
+                what: what.into(),
+            })
+        };
+        let axis_of = |it: &OldItem| match it.word() {
+            [c] => AxisLetter::from_char(char::from(*c)).filter(|a| a.index() < 3),
+            _ => None,
+        };
+        let unit = |a: AxisLetter| {
+            let mut d = [0.0; 3];
+            d[a.index()] = 1.0;
+            d
+        };
+        match (number, sub) {
+            (0, 0) => {
+                let result = items.iter().find_map(|it| match (it.len, it.value) {
+                    (0, Some(crate::tnc::expr::Value::Param { param, .. })) => Some(param),
+                    _ => None,
+                });
+                let dir = items.iter().find_map(|it| {
+                    let a = axis_of(it)?;
+                    let neg = it.sign_only?;
+                    let mut d = unit(a);
+                    if neg {
+                        d = d.map(|v| -v);
+                    }
+                    Some(d)
+                });
+                if result.is_none() || dir.is_none() {
+                    return Err(bad(
+                        "0.0 needs the result parameter and the probing direction (Q10 Z-)",
+                    ));
+                }
+                self.probe.old = Some(OldHead {
+                    cycle: 0,
+                    result,
+                    dir,
+                });
+                Ok(())
+            }
+            (1, 0) => {
+                self.probe.old = Some(OldHead {
+                    cycle: 1,
+                    result: None,
+                    dir: None,
+                });
+                Ok(())
+            }
+            (1, 1) => {
+                let head = self
+                    .probe
+                    .old
+                    .filter(|h| h.cycle == 1)
+                    .ok_or_else(|| bad("1.1 without 1.0"))?;
+                let axis = items
+                    .iter()
+                    .find_map(axis_of)
+                    .ok_or_else(|| bad("1.1 needs the reference axis (X, Y or Z)"))?;
+                let angle = items
+                    .iter()
+                    .find(|it| it.len > 1)
+                    .and_then(|it| self.item_value(it))
+                    .ok_or_else(|| bad("1.1 needs the probing angle (ANGLE:)"))?;
+                // the angle turns the reference axis toward the next axis (X→Y, Y→Z, Z→X)
+                let (s, c) = angle.to_radians().sin_cos();
+                let i = axis.index();
+                let mut d = [0.0; 3];
+                d[i] = c;
+                d[(i + 1) % 3] = s;
+                self.probe.old = Some(OldHead {
+                    dir: Some(d),
+                    ..head
+                });
+                Ok(())
+            }
+            (0, 1) | (1, 2) => {
+                let head = self
+                    .probe
+                    .old
+                    .filter(|h| h.cycle == number && h.dir.is_some())
+                    .ok_or_else(|| bad("the pre-position block needs its head block before it"))?;
+                let Some(dir_xyz) = head.dir else {
+                    return Err(bad("no probing direction"));
+                };
+                let mut target = self.pos;
+                for it in items {
+                    if let Some(a) = axis_of(it) {
+                        let v = self
+                            .item_value(it)
+                            .ok_or_else(|| bad("an axis word of the pre-position needs a value"))?;
+                        target[a] = v * self.unit;
+                    }
+                }
+                // the probe moves to the pre-position in a straight line at rapid traverse
+                let from = self.pos;
+                if from != target {
+                    out.push_back(Op {
+                        kind: OpKind::Line {
+                            from,
+                            to: target,
+                            feed: self.positioning(),
+                        },
+                        loc: run.loc,
+                    });
+                }
+                self.pos = target;
+                let (a, b, n) = self.plane.axes();
+                let dir = [dir_xyz[a.index()], dir_xyz[b.index()], dir_xyz[n.index()]];
+                let t = self.probe_from_here(dir, run, out)?;
+                let tp = self.pose_at(t);
+                for (q, ax) in [
+                    (115, AxisLetter::X),
+                    (116, AxisLetter::Y),
+                    (117, AxisLetter::Z),
+                ] {
+                    self.set_q(q, tp[ax] / self.unit);
+                }
+                if let Some(res) = head.result {
+                    let k = dir_xyz.iter().position(|v| v.abs() == 1.0).unwrap_or(2);
+                    let ax = AxisLetter::ALL.get(k).copied().unwrap_or(AxisLetter::Z);
+                    let surface = tp[ax] + dir_xyz[k] * self.probe.data.radius;
+                    self.params.set(res, surface / self.unit);
+                }
+                Ok(())
+            }
+            _ => Err(perr(ProbeError::Unknown(number))),
+        }
+    }
+}
