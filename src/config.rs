@@ -185,6 +185,15 @@ pub struct SimSpindleConfig {
     /// At-speed window as a fraction of the command.
     #[serde(default = "default_at_speed_fraction")]
     pub at_speed_fraction: f64,
+    /// Encoder counts per revolution of the simulated spindle's angle measurement.
+    #[serde(default = "default_encoder_counts")]
+    pub encoder_counts: u32,
+    /// Fraction of the speed lost per mm² of chip cross-section under cut (0: no dip).
+    #[serde(default)]
+    pub load_droop: f64,
+    /// Time constant of the speed dip under cut, s.
+    #[serde(default = "default_load_time_constant")]
+    pub load_time_constant: f64,
 }
 
 fn default_spindle_acceleration() -> f64 {
@@ -192,6 +201,12 @@ fn default_spindle_acceleration() -> f64 {
 }
 fn default_at_speed_fraction() -> f64 {
     0.02
+}
+fn default_encoder_counts() -> u32 {
+    4096
+}
+fn default_load_time_constant() -> f64 {
+    0.05
 }
 fn default_at_speed_timeout() -> f64 {
     10.0
@@ -202,6 +217,9 @@ impl Default for SimSpindleConfig {
         Self {
             acceleration: default_spindle_acceleration(),
             at_speed_fraction: default_at_speed_fraction(),
+            encoder_counts: default_encoder_counts(),
+            load_droop: 0.0,
+            load_time_constant: default_load_time_constant(),
         }
     }
 }

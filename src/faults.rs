@@ -382,6 +382,10 @@ impl klar_motion::SpindleBackend for ScheduledSpindle {
         }
         self.inner.cycle(t)
     }
+
+    fn set_load(&mut self, section_mm2: f64) {
+        self.inner.set_load(section_mm2);
+    }
 }
 
 #[cfg(test)]

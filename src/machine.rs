@@ -128,6 +128,12 @@ impl Spindle {
     pub fn feedback(&self) -> &SpindleFeedback {
         &self.last
     }
+
+    /// Tells the backend the chip cross-section under cut, mm² (see
+    /// [`SpindleBackend::set_load`]).
+    pub fn set_load(&mut self, section_mm2: f64) {
+        self.backend.set_load(section_mm2);
+    }
 }
 
 impl Drop for Spindle {
@@ -161,6 +167,9 @@ fn sim_spindle_params(max_rpm: f64, sim: &SimSpindleConfig) -> SpindleParams {
         max_rpm,
         acceleration: sim.acceleration,
         at_speed_fraction: sim.at_speed_fraction,
+        encoder_counts: sim.encoder_counts,
+        load_droop: sim.load_droop,
+        load_time_constant: sim.load_time_constant,
         ..SpindleParams::default()
     }
 }

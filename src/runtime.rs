@@ -40,7 +40,7 @@ use crate::latency::Pacer;
 use crate::machine::{MachineError, MachineIo};
 use crate::monitor::{StopCause, StopReport};
 use crate::testrun::{check_positioning, check_travel, planner_ops, positioning_axes};
-use crate::trace::TraceWriter;
+use crate::trace::{SpindleRow, TraceWriter};
 use command::CommandPath;
 pub use error::RunError;
 use klar_interp::{AxisLetter, Op, SourceLoc};
@@ -329,7 +329,15 @@ impl Run<'_, '_> {
             }
         }
         if let Some(tr) = self.trace.as_mut() {
-            tr.row(t, &self.commanded, &self.actual)?;
+            let spindle = self
+                .io
+                .spindle_mut()
+                .map(|s| SpindleRow {
+                    rpm: s.commanded(),
+                    angle: s.feedback().position,
+                })
+                .unwrap_or_default();
+            tr.row(t, &self.commanded, &self.actual, spindle)?;
         }
         Ok(())
     }
@@ -477,7 +485,10 @@ impl<'a, 'w> Run<'a, 'w> {
             .planner(start)
             .map_err(|e| fail(RunError::Motion(e), &report))?;
         let trace = match options.trace {
-            Some(w) => Some(TraceWriter::new(w, &letters).map_err(|e| fail(e.into(), &report))?),
+            Some(w) => Some(
+                TraceWriter::new(w, &letters, config.spindle.is_some())
+                    .map_err(|e| fail(e.into(), &report))?,
+            ),
             None => None,
         };
         io.enable().map_err(|e| fail(e.into(), &report))?;

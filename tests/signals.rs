@@ -62,7 +62,16 @@ fn last_row(trace: &Path) -> Option<Vec<f64>> {
     let text = std::fs::read_to_string(trace).ok()?;
     let whole = &text[..text.rfind('\n')?];
     let line = whole.lines().skip(1).last()?;
-    line.split(',').map(|v| v.parse().ok()).collect()
+    // An empty field (a spindle angle the machine does not measure) reads as NaN.
+    line.split(',')
+        .map(|v| {
+            if v.is_empty() {
+                Some(f64::NAN)
+            } else {
+                v.parse().ok()
+            }
+        })
+        .collect()
 }
 
 /// Starts `klar run PROGRAM --trace TRACE [extra]` with stderr captured.

@@ -166,6 +166,10 @@ pub struct SpindleFeedback {
     pub at_speed: bool,
     /// The active fault, if any.
     pub fault: Option<AxisFault>,
+    /// Measured spindle angle in degrees, unwrapped (it keeps counting past 360°, positive
+    /// clockwise like `rpm`), with 0 at the encoder's index; `None` when the device does not
+    /// measure the spindle's position (a VFD), so nothing can be synchronised to it.
+    pub position: Option<f64>,
 }
 
 /// A spindle drive (simulated, Modbus VFD, or a CiA 402 drive in velocity mode).
@@ -191,4 +195,9 @@ pub trait SpindleBackend {
     fn fault_detail(&self) -> Option<String> {
         None
     }
+
+    /// Tells the spindle the chip cross-section (mm²) the tool cuts from now on, 0 when it
+    /// leaves the cut. Only a simulated spindle uses it (its speed dips under load); real
+    /// drives feel the load themselves. The default ignores it.
+    fn set_load(&mut self, _section_mm2: f64) {}
 }

@@ -10,6 +10,7 @@ fn ramp_reaches_speed_at_the_closed_form_time() {
         acceleration: 8_000.0,
         at_speed_fraction: 0.02,
         at_speed_min_rpm: 10.0,
+        ..SpindleParams::default()
     };
     let mut s = SimSpindle::new(params);
     s.command(6_000.0).unwrap();
@@ -87,4 +88,55 @@ fn positioning_profile_matches_the_trapezoid() {
     }
     assert!((peak - 50.0).abs() < 1e-9);
     assert!((t - 2.5).abs() < 0.02, "{t}");
+}
+
+#[test]
+fn encoder_counts_the_integral_of_the_speed_and_the_cut_slows_it() {
+    let params = SpindleParams {
+        max_rpm: 6_000.0,
+        acceleration: 6_000.0,
+        encoder_counts: 4096,
+        load_droop: 0.1,
+        load_time_constant: 0.05,
+        ..SpindleParams::default()
+    };
+    let mut s = SimSpindle::new(params);
+    s.command(600.0).unwrap();
+    let dt = 0.001;
+    // Ramp 0 → 600 rpm at 6000 rpm/s takes 0.1 s: the angle is ½·a·t² (a in °/s²) then
+    // grows at 3600 °/s.
+    let count = 360.0 / 4096.0;
+    for k in 0..=500 {
+        let t = k as f64 * dt;
+        let fb = s.cycle(t).unwrap();
+        let angle = if t <= 0.1 {
+            0.5 * 36_000.0 * t * t
+        } else {
+            180.0 + 3_600.0 * (t - 0.1)
+        };
+        let measured = fb.position.expect("the simulated spindle has an encoder");
+        // Whole counts toward −∞: at most one count below the true angle, never above.
+        assert!(
+            measured <= angle + 1e-6 && measured > angle - count - 1e-6,
+            "t={t}: {measured} for {angle}"
+        );
+        assert!((measured / count - (measured / count).round()).abs() < 1e-9);
+    }
+    // Under a 2 mm² chip the speed sinks toward 600·(1 − 0.2) = 480 rpm with τ = 50 ms.
+    s.set_load(2.0);
+    let t0 = 0.5;
+    for k in 1..=300 {
+        let t = t0 + k as f64 * dt;
+        let fb = s.cycle(t).unwrap();
+        // The discrete first-order step is exact at the sample times.
+        let dip = 0.2 * (1.0 - (-(t - t0) / 0.05).exp());
+        assert!(
+            (fb.rpm - 600.0 * (1.0 - dip)).abs() < 1e-6,
+            "t={t}: {} rpm",
+            fb.rpm
+        );
+    }
+    s.set_load(0.0);
+    let fb = s.cycle(1.3).unwrap();
+    assert!((fb.rpm - 600.0).abs() < 1.0, "recovers: {}", fb.rpm);
 }

@@ -158,6 +158,19 @@ impl MachineConfig {
                     "spindle simulation at_speed_fraction",
                     sim.at_speed_fraction,
                 )?;
+                if sim.encoder_counts == 0 {
+                    return Err("spindle simulation encoder_counts must be at least 1".into());
+                }
+                if !(sim.load_droop.is_finite() && sim.load_droop >= 0.0) {
+                    return Err(format!(
+                        "spindle simulation load_droop {} must be a number ≥ 0",
+                        sim.load_droop
+                    ));
+                }
+                positive(
+                    "spindle simulation load_time_constant",
+                    sim.load_time_constant,
+                )?;
             }
         }
         Ok(())

@@ -87,6 +87,8 @@ impl SpindleBackend for Cia402Spindle {
         };
         Ok(SpindleFeedback {
             rpm,
+            // This device reports no position (0x6064 is not mapped).
+            position: None,
             at_speed: d.fault.is_none() && at_speed,
             fault: d.fault.clone(),
         })

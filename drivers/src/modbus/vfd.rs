@@ -201,6 +201,8 @@ impl SpindleBackend for ModbusVfd {
         let rpm = snap.status.map_or(0.0, |s| s.rpm);
         let acknowledged = snap.written_rpm == Some(commanded);
         Ok(SpindleFeedback {
+            // A VFD measures no spindle position.
+            position: None,
             rpm,
             at_speed: acknowledged && snap.fault.is_none() && self.within_window(commanded, rpm),
             fault: snap.fault.clone(),

@@ -1,5 +1,11 @@
 //! The simulated spindle motor behind a VFD: speed ramps at a fixed acceleration toward
 //! the commanded speed, so waiting for at-speed takes real (simulated) time.
+//!
+//! The motor also carries an incremental encoder with an index, and feels the cut: while
+//! the tool cuts a chip of cross-section `A` mm², its speed sinks below the ramped speed by
+//! the fraction `load_droop · A` (at most half), reached with the first-order time
+//! constant `load_time_constant` (and recovered the same way when the tool leaves the cut).
+//! The shaft angle is the integral of that speed; the encoder reports it in whole counts.
 
 use klar_motion::{AxisFault, BackendError, SpindleBackend, SpindleFeedback};
 
@@ -15,6 +21,12 @@ pub struct SpindleParams {
     pub at_speed_fraction: f64,
     /// Smallest at-speed window, rpm.
     pub at_speed_min_rpm: f64,
+    /// Encoder counts per revolution (the resolution of the measured angle).
+    pub encoder_counts: u32,
+    /// Fraction of the speed lost per mm² of chip cross-section under cut.
+    pub load_droop: f64,
+    /// Time constant of the speed dip under load, s.
+    pub load_time_constant: f64,
 }
 
 impl Default for SpindleParams {
@@ -24,6 +36,9 @@ impl Default for SpindleParams {
             acceleration: 8_000.0,
             at_speed_fraction: 0.02,
             at_speed_min_rpm: 10.0,
+            encoder_counts: 4096,
+            load_droop: 0.0,
+            load_time_constant: 0.05,
         }
     }
 }
@@ -34,8 +49,15 @@ impl Default for SpindleParams {
 pub struct SpindleModel {
     params: SpindleParams,
     commanded: f64,
+    /// The ramped speed without load, rpm.
     rpm: f64,
     fault: Option<u16>,
+    /// The shaft angle, degrees, unwrapped (0 at the index).
+    angle: f64,
+    /// Chip cross-section under cut, mm².
+    load: f64,
+    /// Present speed dip as a fraction of the ramped speed.
+    dip: f64,
 }
 
 impl SpindleModel {
@@ -46,6 +68,9 @@ impl SpindleModel {
             commanded: 0.0,
             rpm: 0.0,
             fault: None,
+            angle: 0.0,
+            load: 0.0,
+            dip: 0.0,
         }
     }
 
@@ -72,9 +97,30 @@ impl SpindleModel {
         }
     }
 
-    /// The present speed, rpm, signed.
+    /// The present speed, rpm, signed (under load: below the ramped speed by the dip).
     pub fn rpm(&self) -> f64 {
-        self.rpm
+        self.rpm * (1.0 - self.dip)
+    }
+
+    /// The true shaft angle, degrees, unwrapped.
+    pub fn angle(&self) -> f64 {
+        self.angle
+    }
+
+    /// The angle the encoder reports: the shaft angle in whole counts (toward −∞), degrees.
+    pub fn encoder_angle(&self) -> f64 {
+        let counts = f64::from(self.params.encoder_counts.max(1));
+        (self.angle / 360.0 * counts).floor() * 360.0 / counts
+    }
+
+    /// Sets the chip cross-section under cut, mm² (0 out of the cut; non-numbers and
+    /// negative values count as 0).
+    pub fn set_load(&mut self, section_mm2: f64) {
+        self.load = if section_mm2.is_finite() {
+            section_mm2.max(0.0)
+        } else {
+            0.0
+        };
     }
 
     /// The active fault code.
@@ -111,11 +157,22 @@ impl SpindleModel {
         let target = self.command();
         let step = self.params.acceleration * dt;
         let diff = target - self.rpm;
+        let before = self.rpm();
         self.rpm = if diff.abs() <= step {
             target
         } else {
             self.rpm + step.copysign(diff)
         };
+        let goal = (self.params.load_droop * self.load).clamp(0.0, 0.5);
+        let tau = self.params.load_time_constant;
+        let share = if tau > 0.0 {
+            1.0 - (-dt / tau).exp()
+        } else {
+            1.0
+        };
+        self.dip += (goal - self.dip) * share;
+        // rpm → degrees per second: · 360 / 60; the mean speed over the step.
+        self.angle += 0.5 * (before + self.rpm()) * 6.0 * dt;
     }
 }
 
@@ -159,12 +216,17 @@ impl SpindleBackend for SimSpindle {
         Ok(())
     }
 
+    fn set_load(&mut self, section_mm2: f64) {
+        self.model.set_load(section_mm2);
+    }
+
     fn cycle(&mut self, t: f64) -> Result<SpindleFeedback, BackendError> {
         if let Some(last) = self.last_t {
             self.model.advance(t - last);
         }
         self.last_t = Some(t);
         Ok(SpindleFeedback {
+            position: Some(self.model.encoder_angle()),
             rpm: self.model.rpm(),
             at_speed: self.model.at_speed(),
             fault: self.model.fault().map(|code| AxisFault::Drive {
