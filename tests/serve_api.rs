@@ -277,3 +277,307 @@ fn the_machine_api_names_the_preset_programs_start_from() {
     let (_, body) = request(addr2, "GET", "/api/machine", "", "");
     assert_eq!(json(&body)["preset"], "none (machine datum)");
 }
+
+// ---- manual operation, programs and honest state -------------------------------------------
+
+/// The built-in mill with X's home switch at X+40 and a negative limit switch at X-5.
+fn switched_mill(dir: &Path) -> MachineConfig {
+    let text = klar::config::BUILTIN_MILL.replacen(
+        "backend = { kind = \"sim\" }",
+        "backend = { kind = \"sim\", home_switch = 40.0, limit_switch_negative = -5.0 }",
+        1,
+    );
+    let file = dir.join("switched.toml");
+    std::fs::write(&file, text).unwrap();
+    MachineConfig::load(&file).expect("machine loads")
+}
+
+fn post(addr: SocketAddr, path: &str, body: &str) -> (u16, serde_json::Value) {
+    let (code, text) = request(addr, "POST", path, "", body);
+    let v = if text.trim().is_empty() {
+        serde_json::Value::Null
+    } else {
+        json(&text)
+    };
+    (code, v)
+}
+
+/// Polls the status until `done` holds (20 s at most).
+fn wait_for(
+    addr: SocketAddr,
+    what: &str,
+    done: &dyn Fn(&serde_json::Value) -> bool,
+) -> serde_json::Value {
+    let until = Instant::now() + Duration::from_secs(20);
+    loop {
+        let s = json(&request(addr, "GET", "/api/status", "", "").1);
+        if done(&s) {
+            return s;
+        }
+        assert!(Instant::now() < until, "no {what}: {s}");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn at_rest(s: &serde_json::Value) -> bool {
+    s["state"] == "idle" && s["path_speed"] == 0.0
+}
+
+#[test]
+fn a_jog_moves_its_axis_by_the_distance_within_the_soft_limits() {
+    let dir = programs_dir("jog");
+    let (_rt, addr) = start(options(&dir, None));
+    let (code, v) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "X", "distance": 2.5, "speed": 20}"#,
+    );
+    assert_eq!(code, 204, "{v}");
+    let s = wait_for(addr, "the jog's end", &|s| {
+        at_rest(s) && s["manual"] == "jog X +2.500"
+    });
+    // From the start X0 Y0 Z100: exactly 2.5 mm along X, nothing else.
+    assert_eq!(s["commanded"], serde_json::json!([2.5, 0.0, 100.0]));
+    // Z travels -200 … 200 and stands at 100: +150 would end at 250.
+    let (code, v) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "Z", "distance": 150, "speed": 20}"#,
+    );
+    assert_eq!(code, 422);
+    let why = v["error"].as_str().unwrap();
+    assert!(why.contains("250.000") && why.contains("travel"), "{why}");
+    for bad in [
+        r#"{"axis": "Q", "distance": 1, "speed": 20}"#,
+        r#"{"axis": "X", "distance": 1, "speed": 0}"#,
+        r#"{"axis": "X", "distance": 0, "speed": 20}"#,
+        r#"{"axis": "X", "direction": 2, "speed": 20}"#,
+        r#"{"axis": "X", "speed": 20}"#,
+    ] {
+        let (code, v) = post(addr, "/api/jog", bad);
+        assert_eq!(code, 422, "{bad}: {v}");
+        assert!(v["error"].is_string(), "{bad}: {v}");
+    }
+    // Nothing of that moved anything.
+    let s = json(&request(addr, "GET", "/api/status", "", "").1);
+    assert_eq!(s["commanded"], serde_json::json!([2.5, 0.0, 100.0]));
+}
+
+#[test]
+fn a_continuous_jog_runs_until_stopped_and_the_next_run_starts_there() {
+    let dir = programs_dir("jogc");
+    let (_rt, addr) = start(options(&dir, None));
+    let (code, v) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "Y", "direction": -1, "speed": 50}"#,
+    );
+    assert_eq!(code, 204, "{v}");
+    wait_for(addr, "motion", &|s| {
+        s["state"] == "running" && s["path_speed"].as_f64() > Some(10.0)
+    });
+    assert_eq!(post(addr, "/api/stop", "").0, 204);
+    let s = wait_for(addr, "rest", &at_rest);
+    let y = s["commanded"][1].as_f64().unwrap();
+    // Stopped on the way: moved, but far from the end of the travel at -300.
+    assert!((-290.0..-1.0).contains(&y), "{s}");
+    // A program starts where the axes stand: one.h moves X only, Y stays.
+    assert_eq!(post(addr, "/api/load", r#"{"name": "one.h"}"#).0, 204);
+    assert_eq!(post(addr, "/api/start", "").0, 204);
+    let end = wait_for(addr, "the end", &|s| s["state"] == "finished");
+    assert_eq!(end["commanded"][0], 50.0, "{end}");
+    assert_eq!(end["commanded"][1].as_f64().unwrap(), y, "{end}");
+}
+
+#[test]
+fn manual_operation_is_refused_while_a_program_runs() {
+    let dir = programs_dir("busy");
+    let (_rt, addr) = start(options(&dir, None));
+    assert_eq!(post(addr, "/api/load", r#"{"name": "one.h"}"#).0, 204);
+    assert_eq!(post(addr, "/api/override", r#"{"factor": 0.2}"#).0, 204);
+    assert_eq!(post(addr, "/api/start", "").0, 204);
+    for (path, body) in [
+        ("/api/jog", r#"{"axis": "X", "distance": 1, "speed": 20}"#),
+        ("/api/jog", r#"{"axis": "X", "direction": 1, "speed": 20}"#),
+        ("/api/mdi", r#"{"block": "L X+10 F1000"}"#),
+        ("/api/home", ""),
+        ("/api/reset", ""),
+        ("/api/start", ""),
+    ] {
+        let (code, v) = post(addr, path, body);
+        assert_eq!(code, 409, "{path} {body}: {v}");
+        assert!(v["error"].as_str().unwrap().contains("running"), "{v}");
+    }
+    // The running program cannot be replaced under it either.
+    let (code, _) = post(addr, "/api/upload", r#"{"name": "one.h", "text": "x"}"#);
+    assert_eq!(code, 409);
+    assert_eq!(post(addr, "/api/stop", "").0, 204);
+    let s = wait_for(addr, "the stop", &|s| s["state"] == "stopped");
+    // At rest: no path speed, the spindle (the mill has one) at 0.
+    assert_eq!(s["path_speed"], 0.0);
+    assert_eq!(s["spindle_rpm"], 0.0);
+}
+
+#[test]
+fn mdi_runs_one_checked_block_from_where_the_axes_stand() {
+    let dir = programs_dir("mdi");
+    let (_rt, addr) = start(options(&dir, None));
+    let (code, v) = post(addr, "/api/mdi", r#"{"block": "L X+10 Y+5 F1000"}"#);
+    assert_eq!(code, 204, "{v}");
+    let s = wait_for(addr, "the MDI block's end", &|s| {
+        at_rest(s) && s["manual"] == "MDI L X+10 Y+5 F1000"
+    });
+    assert_eq!(s["commanded"], serde_json::json!([10.0, 5.0, 100.0]));
+    // Incremental from there.
+    assert_eq!(
+        post(addr, "/api/mdi", r#"{"block": "L IX-4 F1000"}"#).0,
+        204
+    );
+    let s = wait_for(addr, "the second block", &|s| {
+        at_rest(s) && s["manual"] == "MDI L IX-4 F1000"
+    });
+    assert_eq!(s["commanded"], serde_json::json!([6.0, 5.0, 100.0]));
+    // The test run refuses what the machine cannot do, and what is not a block.
+    let (code, v) = post(addr, "/api/mdi", r#"{"block": "L X+1000 F1000"}"#);
+    assert_eq!(code, 422);
+    assert!(v["error"].as_str().unwrap().contains("travel"), "{v}");
+    let (code, v) = post(addr, "/api/mdi", r#"{"block": "L X+10 FOO"}"#);
+    assert_eq!(code, 422);
+    assert!(v["error"].as_str().unwrap().contains("FOO"), "{v}");
+    let (code, _) = post(addr, "/api/mdi", r#"{"block": "L X+1\nL X+2"}"#);
+    assert_eq!(code, 422);
+    let s = json(&request(addr, "GET", "/api/status", "", "").1);
+    assert_eq!(s["commanded"], serde_json::json!([6.0, 5.0, 100.0]));
+}
+
+#[test]
+fn homing_finds_the_home_switch() {
+    let dir = programs_dir("home");
+    let machine = switched_mill(&dir);
+    let (_rt, addr) = start(ServeOptions {
+        machine,
+        ..options(&dir, None)
+    });
+    let (code, v) = post(addr, "/api/home", r#"{"axis": "X"}"#);
+    assert_eq!(code, 204, "{v}");
+    let s = wait_for(addr, "homing", &|s| {
+        s["manual"] == "home X" && s["state"] == "idle"
+    });
+    // X stands at its home switch (to the count), Y and Z where they were.
+    let x = s["actual"][0].as_f64().unwrap();
+    assert!((x - 40.0).abs() < 1e-3, "{s}");
+    assert_eq!(s["actual"][1], 0.0, "{s}");
+    assert!(
+        (s["actual"][2].as_f64().unwrap() - 100.0).abs() < 1e-3,
+        "{s}"
+    );
+    let (code, _) = post(addr, "/api/home", r#"{"axis": "W"}"#);
+    assert_eq!(code, 422);
+}
+
+#[test]
+fn after_a_fault_nothing_starts_until_reset() {
+    let dir = programs_dir("fault");
+    let machine = switched_mill(&dir);
+    let (_rt, addr) = start(ServeOptions {
+        machine,
+        ..options(&dir, None)
+    });
+    // Jogging X to -10 runs into the limit switch at -5.
+    let (code, v) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "X", "distance": -10, "speed": 20}"#,
+    );
+    assert_eq!(code, 204, "{v}");
+    let s = wait_for(addr, "the fault", &|s| s["state"] == "fault");
+    assert!(
+        s["message"].as_str().unwrap().contains("limit switch"),
+        "{s}"
+    );
+    assert_eq!(post(addr, "/api/load", r#"{"name": "one.h"}"#).0, 204);
+    let (code, v) = post(addr, "/api/start", "");
+    assert_eq!(code, 409);
+    assert!(v["error"].as_str().unwrap().contains("Reset"), "{v}");
+    let (code, _) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "X", "distance": 3, "speed": 20}"#,
+    );
+    assert_eq!(code, 409);
+    assert_eq!(post(addr, "/api/reset", "").0, 204);
+    let s = wait_for(addr, "the reset", &|s| s["state"] == "idle");
+    assert!(s["message"].is_null(), "{s}");
+    let x = s["actual"][0].as_f64().unwrap();
+    assert!(x <= -5.0 && x > -6.0, "stopped near the switch: {s}");
+    // Away from the switch is allowed.
+    let (code, v) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "X", "distance": 3, "speed": 20}"#,
+    );
+    assert_eq!(code, 204, "{v}");
+    let s = wait_for(addr, "the jog off the switch", &|s| {
+        at_rest(s) && s["manual"] == "jog X +3.000"
+    });
+    assert!(
+        (s["actual"][0].as_f64().unwrap() - (x + 3.0)).abs() < 1e-3,
+        "{s}"
+    );
+}
+
+#[test]
+fn uploads_are_checked_saved_and_shown_with_their_errors() {
+    let dir = programs_dir("upload");
+    let (_rt, addr) = start(options(&dir, None));
+    for name in ["../evil.h", "sub/x.h", ".x.h", "x.txt", "", "a\\\\b.h"] {
+        let body = serde_json::json!({"name": name, "text": ONE_LINE}).to_string();
+        let (code, v) = post(addr, "/api/upload", &body);
+        assert_eq!(code, 422, "{name:?}: {v}");
+    }
+    let big = "; x\n".repeat(300_000);
+    let body = serde_json::json!({"name": "big.h", "text": big}).to_string();
+    assert_eq!(post(addr, "/api/upload", &body).0, 422);
+    assert!(!dir.join("big.h").exists());
+    let bad = "0 BEGIN PGM BAD MM\n1 L X+10 R0 F1000\n2 L Y+10 FOO\n3 END PGM BAD MM\n";
+    let body = serde_json::json!({"name": "bad.h", "text": bad}).to_string();
+    assert_eq!(post(addr, "/api/upload", &body).0, 201);
+    assert_eq!(std::fs::read_to_string(dir.join("bad.h")).unwrap(), bad);
+    let (_, list) = request(addr, "GET", "/api/programs", "", "");
+    assert_eq!(json(&list), serde_json::json!(["bad.h", "one.h"]));
+    let (_, view) = request(addr, "GET", "/api/program?name=bad.h", "", "");
+    let view = json(&view);
+    let d = &view["diagnostics"][0];
+    assert_eq!(
+        (d["line"].as_u64(), d["error"].as_bool()),
+        (Some(3), Some(true)),
+        "{view}"
+    );
+    // A lathe program is refused on the mill when it is loaded, with the reason.
+    let lathe = "%t.nc\nMACHINING\nN1 G0 X40 Z5\nEND\n";
+    let body = serde_json::json!({"name": "t.nc", "text": lathe}).to_string();
+    assert_eq!(post(addr, "/api/upload", &body).0, 201);
+    let (code, v) = post(addr, "/api/load", r#"{"name": "t.nc"}"#);
+    assert_eq!(code, 422);
+    assert!(v["error"].as_str().unwrap().contains("lathe"), "{v}");
+}
+
+#[test]
+fn the_program_view_has_the_blank_the_block_ends_and_the_machine_time() {
+    let dir = programs_dir("view");
+    let (_rt, addr) = start(options(&dir, None));
+    let (_, view) = request(addr, "GET", "/api/program?name=one.h", "", "");
+    let view = json(&view);
+    // one.h: X+50 at 100 mm/s from rest is at least 0.5 s, plus the ramps.
+    let t = view["machine_time"].as_f64().unwrap();
+    assert!(t > 0.5 && t < 1.0, "{view}");
+    assert_eq!(view["ends"]["2"], serde_json::json!([50.0, 0.0, 100.0]));
+    assert!(view["stock"].is_null());
+    let prog = "0 BEGIN PGM B MM\n1 BLK FORM 0.1 Z X-5 Y+0 Z-20\n2 BLK FORM 0.2 X+100 Y+60 Z+0\n3 L X+10 R0 FMAX\n4 END PGM B MM\n";
+    std::fs::write(dir.join("blk.h"), prog).unwrap();
+    let (_, view) = request(addr, "GET", "/api/program?name=blk.h", "", "");
+    assert_eq!(
+        json(&view)["stock"],
+        serde_json::json!([[-5.0, 0.0, -20.0], [100.0, 60.0, 0.0]])
+    );
+}

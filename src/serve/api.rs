@@ -1,6 +1,8 @@
 //! The dashboard's HTTP routes and WebSocket, and the access-token check.
 
 use super::ServeOptions;
+use super::manual::{ManualOp, Refusal, is_lathe};
+use super::program::{ProgramView, program_view, wrong_machine};
 use super::session::{Command, MachineLoop, MachineState, Snapshot, idle_snapshot};
 use crate::config::MachineConfig;
 use crate::runtime::OperatorStop;
@@ -12,7 +14,6 @@ use axum::http::{HeaderValue, StatusCode, header};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
 use axum::routing::{get, post};
-use klar_interp::Pose;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::Sender;
@@ -22,6 +23,17 @@ use tokio::sync::broadcast;
 const INDEX_HTML: &str = include_str!("assets/index.html");
 const APP_JS: &str = include_str!("assets/app.js");
 const STYLE_CSS: &str = include_str!("assets/style.css");
+const VIEW_JS: &str = include_str!("assets/view.js");
+
+/// Largest program text `POST /api/upload` accepts, bytes.
+pub const MAX_UPLOAD: usize = 1024 * 1024;
+
+/// Longest program name `POST /api/upload` accepts, characters.
+const MAX_UPLOAD_NAME: usize = 100;
+
+/// How long an API call waits for the machine thread's answer (a test run of a manual
+/// block, or a homing sequence in simulated time).
+const REPLY_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(60);
 
 /// Program file extensions the page offers.
 const PROGRAM_EXTENSIONS: [&str; 3] = ["h", "i", "nc"];
@@ -104,16 +116,26 @@ enum ApiError {
     MachineGone,
     #[error("a program is running: stop it first")]
     Busy,
+    #[error("{0}")]
+    Refused(Refusal),
+    #[error("{0}")]
+    BadRequest(String),
+    #[error("the machine thread did not answer in time")]
+    NoAnswer,
 }
 
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
-        let code = match self {
+        let code = match &self {
             ApiError::Unauthorized => StatusCode::UNAUTHORIZED,
             ApiError::CrossSite => StatusCode::FORBIDDEN,
             ApiError::UnknownProgram(_) => StatusCode::NOT_FOUND,
             ApiError::Busy => StatusCode::CONFLICT,
-            ApiError::Read(_) | ApiError::MachineGone => StatusCode::INTERNAL_SERVER_ERROR,
+            ApiError::Refused(r) if r.is_conflict() => StatusCode::CONFLICT,
+            ApiError::Refused(_) | ApiError::BadRequest(_) => StatusCode::UNPROCESSABLE_ENTITY,
+            ApiError::Read(_) | ApiError::MachineGone | ApiError::NoAnswer => {
+                StatusCode::INTERNAL_SERVER_ERROR
+            }
         };
         (code, Json(serde_json::json!({ "error": self.to_string() }))).into_response()
     }
@@ -121,31 +143,46 @@ impl IntoResponse for ApiError {
 
 /// The dashboard's routes on `app`.
 pub fn router(app: App) -> Router {
-    let api = Router::new()
-        .route("/api/machine", get(machine))
-        .route("/api/programs", get(programs))
-        .route("/api/program", get(program))
-        .route("/api/status", get(status))
-        .route("/api/load", post(load))
-        .route(
-            "/api/start",
-            post(|s: State<App>| simple(s, Command::Start)),
-        )
-        .route("/api/hold", post(|s: State<App>| simple(s, Command::Hold)))
-        .route(
-            "/api/resume",
-            post(|s: State<App>| simple(s, Command::Resume)),
-        )
-        .route("/api/stop", post(|s: State<App>| simple(s, Command::Stop)))
-        .route("/api/override", post(feed_override))
-        .route("/api/single_block", post(single_block))
-        .route("/ws", get(ws))
-        .route_layer(middleware::from_fn_with_state(app.clone(), require_token));
+    let api =
+        Router::new()
+            .route("/api/machine", get(machine))
+            .route("/api/programs", get(programs))
+            .route("/api/program", get(program))
+            .route("/api/status", get(status))
+            .route("/api/load", post(load))
+            .route(
+                "/api/start",
+                post(|State(app): State<App>| async move {
+                    ask(&app, |r| Command::Start(Some(r))).await
+                }),
+            )
+            .route(
+                "/api/reset",
+                post(|State(app): State<App>| async move { ask(&app, Command::Reset).await }),
+            )
+            .route("/api/jog", post(jog))
+            .route("/api/home", post(home))
+            .route("/api/mdi", post(mdi))
+            .route("/api/upload", post(upload))
+            .route("/api/hold", post(|s: State<App>| simple(s, Command::Hold)))
+            .route(
+                "/api/resume",
+                post(|s: State<App>| simple(s, Command::Resume)),
+            )
+            .route("/api/stop", post(|s: State<App>| simple(s, Command::Stop)))
+            .route("/api/override", post(feed_override))
+            .route("/api/single_block", post(single_block))
+            .route("/ws", get(ws))
+            .route_layer(middleware::from_fn_with_state(app.clone(), require_token));
     Router::new()
         .route("/", get(|| asset(INDEX_HTML, "text/html; charset=utf-8")))
         .route(
             "/app.js",
             get(|| asset(APP_JS, "text/javascript; charset=utf-8")),
+        )
+        .route(
+            "/view.js",
+            get(|| asset(VIEW_JS, "text/javascript; charset=utf-8")),
         )
         .route(
             "/style.css",
@@ -245,6 +282,19 @@ struct MachineInfo {
     servo_period: f64,
     /// The preset programs start from (the machine file's `active_preset`), in words.
     preset: String,
+    /// True for a lathe (its programs are lathe DIN).
+    lathe: bool,
+    /// The tool table: number, name, length, radius (empty without one).
+    tools: Vec<ToolRow>,
+}
+
+/// One row of the tool table as the page shows it.
+#[derive(Serialize)]
+struct ToolRow {
+    number: u32,
+    name: String,
+    length: f64,
+    radius: f64,
 }
 
 async fn machine(State(app): State<App>) -> Json<MachineInfo> {
@@ -257,6 +307,19 @@ async fn machine(State(app): State<App>) -> Json<MachineInfo> {
         preset: match m.active_preset() {
             Ok(p) => p.to_string(),
             Err(e) => e,
+        },
+        lathe: is_lathe(m),
+        tools: match m.tool_table() {
+            Ok(Some(t)) => t
+                .iter()
+                .map(|t| ToolRow {
+                    number: t.number,
+                    name: t.name.clone(),
+                    length: t.length,
+                    radius: t.radius,
+                })
+                .collect(),
+            _ => Vec::new(),
         },
     })
 }
@@ -322,63 +385,19 @@ struct NameQuery {
     name: String,
 }
 
-/// One polyline of the planned toolpath.
-#[derive(Serialize)]
-struct PathStroke {
-    rapid: bool,
-    points: Vec<[f64; 3]>,
-}
-
-/// A program's text and its planned toolpath (or why it has none).
-#[derive(Serialize)]
-struct ProgramView {
-    name: String,
-    text: String,
-    path: Vec<PathStroke>,
-    errors: Vec<String>,
-}
-
-fn start_pose(machine: &MachineConfig) -> Pose {
-    machine.start_pose()
-}
-
-/// Largest program file the dashboard shows, bytes (its text is sent to the page whole).
-const MAX_SHOWN_PROGRAM: u64 = 16 * 1024 * 1024;
-
 async fn program(
     State(app): State<App>,
     Query(q): Query<NameQuery>,
 ) -> Result<Json<ProgramView>, ApiError> {
     let path = resolve(&app, &q.name).await?;
-    let start = start_pose(&app.inner.machine);
+    let standing = match app.latest() {
+        Some(s) => app.inner.machine.starting_at(s.actual),
+        None => app.inner.machine.clone(),
+    };
     let name = q.name.clone();
     let inner = Arc::clone(&app.inner);
     let view = tokio::task::spawn_blocking(move || {
-        let bytes = klar_interp::read_bounded(&path, MAX_SHOWN_PROGRAM)
-            .map_err(|e| ApiError::Read(e.to_string()))?;
-        let text = String::from_utf8(bytes)
-            // Older controls write latin-1: every byte is its own code point.
-            .unwrap_or_else(|e| e.into_bytes().iter().map(|&b| b as char).collect());
-        // the path as the program runs on the served machine
-        let (path, errors) = match crate::plot::toolpath(&path, Some(&inner.machine), start) {
-            Ok(strokes) => (
-                strokes
-                    .into_iter()
-                    .map(|s| PathStroke {
-                        rapid: s.rapid,
-                        points: s.points,
-                    })
-                    .collect(),
-                Vec::new(),
-            ),
-            Err(e) => (Vec::new(), vec![e.to_string()]),
-        };
-        Ok(ProgramView {
-            name,
-            text,
-            path,
-            errors,
-        })
+        program_view(name, &path, &inner.machine, &standing).map_err(ApiError::Read)
     })
     .await
     .map_err(|e| ApiError::Read(e.to_string()))??;
@@ -405,11 +424,166 @@ async fn load(
     if running {
         return Err(ApiError::Busy);
     }
+    if let Some(why) = wrong_machine(&path, &app.inner.machine) {
+        return Err(ApiError::BadRequest(why));
+    }
     app.send(Command::Load {
         name: req.name,
         path,
     })?;
     Ok(StatusCode::NO_CONTENT)
+}
+
+/// Sends a command that the machine thread answers, and answers with its verdict.
+async fn ask(
+    app: &App,
+    command: impl FnOnce(super::session::Reply) -> Command,
+) -> Result<StatusCode, ApiError> {
+    let (tx, rx) = tokio::sync::oneshot::channel();
+    app.send(command(tx))?;
+    match tokio::time::timeout(REPLY_TIMEOUT, rx).await {
+        Ok(Ok(Ok(()))) => Ok(StatusCode::NO_CONTENT),
+        Ok(Ok(Err(r))) => Err(ApiError::Refused(r)),
+        Ok(Err(_)) => Err(ApiError::MachineGone),
+        Err(_) => Err(ApiError::NoAnswer),
+    }
+}
+
+/// `POST /api/jog`: `{"axis", "distance", "speed"}` moves by the distance;
+/// `{"axis", "direction", "speed"}` moves until `POST /api/stop` or the end of the travel.
+#[derive(Deserialize)]
+struct JogRequest {
+    axis: String,
+    distance: Option<f64>,
+    direction: Option<f64>,
+    speed: f64,
+}
+
+async fn jog(State(app): State<App>, Json(req): Json<JogRequest>) -> Result<StatusCode, ApiError> {
+    let op = match (req.distance, req.direction) {
+        (Some(distance), None) => ManualOp::Jog {
+            axis: req.axis,
+            distance,
+            speed: req.speed,
+        },
+        (None, Some(direction)) => ManualOp::JogContinuous {
+            axis: req.axis,
+            direction,
+            speed: req.speed,
+        },
+        _ => {
+            return Err(ApiError::BadRequest(
+                "a jog has either a distance or a direction".into(),
+            ));
+        }
+    };
+    ask(&app, |r| Command::Manual(op, r)).await
+}
+
+#[derive(Deserialize)]
+struct HomeRequest {
+    axis: Option<String>,
+}
+
+/// `POST /api/home`: no body (or `{}`) homes every axis, `{"axis": "X"}` one.
+async fn home(State(app): State<App>, body: axum::body::Bytes) -> Result<StatusCode, ApiError> {
+    let axis = if body.iter().all(u8::is_ascii_whitespace) {
+        None
+    } else {
+        serde_json::from_slice::<HomeRequest>(&body)
+            .map_err(|e| ApiError::BadRequest(format!("home: {e}")))?
+            .axis
+    };
+    ask(&app, |r| Command::Manual(ManualOp::Home { axis }, r)).await
+}
+
+#[derive(Deserialize)]
+struct MdiRequest {
+    block: String,
+}
+
+async fn mdi(State(app): State<App>, Json(req): Json<MdiRequest>) -> Result<StatusCode, ApiError> {
+    let op = ManualOp::Mdi { block: req.block };
+    ask(&app, |r| Command::Manual(op, r)).await
+}
+
+#[derive(Deserialize)]
+struct UploadRequest {
+    name: String,
+    text: String,
+}
+
+/// Why `name` is no name an uploaded program may have: a plain file name (no folders, no
+/// leading dot, printable) of at most [`MAX_UPLOAD_NAME`] characters with a program
+/// extension.
+fn bad_upload_name(name: &str) -> Option<String> {
+    if name.is_empty() || name.chars().count() > MAX_UPLOAD_NAME {
+        return Some(format!(
+            "a program name has 1 to {MAX_UPLOAD_NAME} characters"
+        ));
+    }
+    if name.contains(['/', '\\', ':']) || name.starts_with('.') {
+        return Some(format!(
+            "{name:?}: a program name is a plain file name, without folders"
+        ));
+    }
+    if name.chars().any(char::is_control) {
+        return Some("a program name has no control characters".into());
+    }
+    let ext = Path::new(name)
+        .extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("");
+    if !PROGRAM_EXTENSIONS
+        .iter()
+        .any(|p| ext.eq_ignore_ascii_case(p))
+    {
+        return Some(format!(
+            "{name:?}: a program name ends in .h (Klartext), .i (ISO) or .nc (lathe DIN)"
+        ));
+    }
+    None
+}
+
+/// `POST /api/upload`: saves the text as a program in the programs folder (a file of that
+/// name is replaced, unless it is the program running).
+async fn upload(
+    State(app): State<App>,
+    Json(req): Json<UploadRequest>,
+) -> Result<Response, ApiError> {
+    if let Some(why) = bad_upload_name(&req.name) {
+        return Err(ApiError::BadRequest(why));
+    }
+    if req.text.len() > MAX_UPLOAD {
+        return Err(ApiError::BadRequest(format!(
+            "the program has {} bytes; at most {MAX_UPLOAD} are accepted",
+            req.text.len()
+        )));
+    }
+    let running = app.latest().is_some_and(|s| {
+        matches!(s.state, MachineState::Running | MachineState::Held)
+            && s.program.as_deref() == Some(req.name.as_str())
+    });
+    if running {
+        return Err(ApiError::Busy);
+    }
+    let dir = app.inner.programs.clone();
+    let name = req.name.clone();
+    tokio::task::spawn_blocking(move || {
+        std::fs::create_dir_all(&dir)?;
+        // Written beside and renamed: a reader never sees half a program.
+        let part = dir.join(format!(".{name}.part"));
+        std::fs::write(&part, req.text.as_bytes())?;
+        std::fs::rename(&part, dir.join(&name))
+    })
+    .await
+    .map_err(|e| ApiError::Read(e.to_string()))?
+    .map_err(|e| ApiError::Read(format!("cannot save the program: {e}")))?;
+    Ok((
+        StatusCode::CREATED,
+        Json(serde_json::json!({ "name": req.name })),
+    )
+        .into_response())
 }
 
 async fn simple(State(app): State<App>, command: Command) -> Result<StatusCode, ApiError> {
@@ -512,6 +686,28 @@ mod tests {
         assert!(same_secret("abcdefgh", "abcdefgh"));
         assert!(!same_secret("abcdefgh", "abcdefgX"));
         assert!(!same_secret("abcdefgh", "abcdefg"));
+    }
+
+    #[test]
+    fn upload_names_are_plain_program_file_names() {
+        for ok in ["part.h", "P1.I", "shaft 2.nc"] {
+            assert_eq!(bad_upload_name(ok), None, "{ok}");
+        }
+        let long = format!("{}.h", "a".repeat(MAX_UPLOAD_NAME));
+        for bad in [
+            "",
+            "../x.h",
+            "sub/x.h",
+            "a\\b.h",
+            ".hidden.h",
+            "c:x.h",
+            "x.txt",
+            "x",
+            "x\n.h",
+            long.as_str(),
+        ] {
+            assert!(bad_upload_name(bad).is_some(), "{bad:?}");
+        }
     }
 
     #[test]

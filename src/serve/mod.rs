@@ -10,9 +10,13 @@
 //! `GET /api/programs`, `GET /api/program?name=N` (text and planned toolpath),
 //! `GET /api/status`, `POST /api/load` `{"name": N}`, `POST /api/start`, `/api/hold`,
 //! `/api/resume`, `/api/stop`, `POST /api/override` `{"factor": F}`,
-//! `POST /api/single_block` `{"on": B}`, `GET /ws` (snapshots as JSON text messages).
+//! `POST /api/single_block` `{"on": B}`, `POST /api/jog`, `POST /api/home`,
+//! `POST /api/mdi`, `POST /api/reset`, `POST /api/upload`, `GET /ws` (snapshots as JSON
+//! text messages); docs/dashboard.md has the bodies and answers.
 
 mod api;
+pub mod manual;
+mod program;
 pub mod session;
 
 use crate::config::MachineConfig;

@@ -5,7 +5,9 @@
 //! A [`Run`] holds parts that must stay on one thread, so it is created and stepped here and
 //! never leaves this thread; the web side only talks to it through channels.
 
-use crate::config::MachineConfig;
+use super::manual::{self, ManualOp, Refusal};
+use crate::config::{BackendConfig, MachineConfig};
+use crate::machine::MachineIo;
 use crate::runtime::{OperatorStop, Run, RunError, RunOptions, RunStatus, StopLevel};
 use klar_interp::AxisLetter;
 use serde::Serialize;
@@ -27,8 +29,15 @@ const IDLE_POLL: Duration = Duration::from_millis(100);
 /// Machine time between two points of the executed-path trail, s.
 const TRAIL_PERIOD: f64 = 0.005;
 
+/// Machine time one axis may take to home, s.
+const HOMING_TIMEOUT: f64 = 300.0;
+
+/// Where the machine thread answers a request: accepted (the operation begins) or refused
+/// with the reason.
+pub type Reply = tokio::sync::oneshot::Sender<Result<(), Refusal>>;
+
 /// What the operator asks of the machine.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug)]
 pub enum Command {
     /// Makes `path` (shown as `name`) the program that [`Command::Start`] runs.
     Load {
@@ -37,8 +46,13 @@ pub enum Command {
         /// The program file.
         path: PathBuf,
     },
-    /// Runs the loaded program from its start (ignored while one runs).
-    Start,
+    /// Runs the loaded program from its start, from where the axes stand; refused while
+    /// the machine runs or has an unacknowledged fault.
+    Start(Option<Reply>),
+    /// A manual operation (jog, homing, MDI); refused like [`Command::Start`].
+    Manual(ManualOp, Reply),
+    /// Acknowledges the fault or error that ended the last run (refused while running).
+    Reset(Reply),
     /// Feed hold: brake along the path and wait.
     Hold,
     /// End a feed hold.
@@ -111,6 +125,9 @@ pub struct Snapshot {
     pub spindle_rpm: Option<f64>,
     /// The last fault or error message, if the last run ended with one.
     pub message: Option<String>,
+    /// The manual operation running or last run (`jog X +2.500`, `MDI L X+10`, …), `None`
+    /// while the loaded program runs.
+    pub manual: Option<String>,
     /// Executed tool positions (X, Y, Z) since the previous snapshot.
     pub trail: Vec<[f64; 3]>,
 }
@@ -124,6 +141,13 @@ pub struct MachineLoop {
     snap: Snapshot,
     program_path: Option<PathBuf>,
     feed_override: f64,
+    /// Where the axes stand (machine order): every run starts from here, as the axes of a
+    /// machine do; updated from the measured positions when a run ends.
+    standing: Vec<f64>,
+    /// Axes homed from the dashboard (a simulated axis keeps its reference across runs).
+    homed: Vec<bool>,
+    /// Folder for the programs manual operations generate.
+    scratch: PathBuf,
     /// The operator's stop from outside (signals): ends a running program and the loop.
     stop: OperatorStop,
 }
@@ -184,7 +208,15 @@ impl MachineLoop {
         latest: Arc<Mutex<Snapshot>>,
     ) -> Self {
         let snap = idle_snapshot(&config);
+        let nanos = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0, |d| d.as_nanos());
+        let scratch =
+            std::env::temp_dir().join(format!("klar-manual-{}-{nanos:x}", std::process::id()));
         Self {
+            standing: config.axes.iter().map(|a| a.start).collect(),
+            homed: vec![false; config.axes.len()],
+            scratch,
             config,
             commands,
             snapshots,
@@ -209,7 +241,8 @@ impl MachineLoop {
         let mut last_publish = Instant::now();
         while self.stop.level() == StopLevel::None {
             match self.commands.recv_timeout(IDLE_POLL) {
-                Ok(Command::Start) => self.run_program(),
+                Ok(Command::Start(reply)) => self.start_program(reply),
+                Ok(Command::Manual(op, reply)) => self.manual(op, reply),
                 Ok(other) => self.idle_command(other),
                 Err(RecvTimeoutError::Timeout) => {
                     if last_publish.elapsed() >= IDLE_PUBLISH_PERIOD {
@@ -220,17 +253,207 @@ impl MachineLoop {
                 Err(RecvTimeoutError::Disconnected) => return,
             }
         }
+        let _ = std::fs::remove_dir_all(&self.scratch);
         tracing::info!("machine loop ended by the operator's stop");
+    }
+
+    /// The machine as the next run sees it: every axis starting where it stands, and a
+    /// simulated axis homed from the dashboard still referenced.
+    fn run_config(&self) -> MachineConfig {
+        let mut c = self.config.starting_at(self.standing.iter().copied());
+        for (a, &homed) in c.axes.iter_mut().zip(&self.homed) {
+            if homed && let BackendConfig::Sim(p) = &mut a.backend {
+                p.start_homed = true;
+            }
+        }
+        c
+    }
+
+    /// Why nothing may start now, if anything.
+    fn refusal(&self) -> Option<Refusal> {
+        match self.snap.state {
+            MachineState::Running | MachineState::Held => Some(Refusal::Busy),
+            MachineState::Fault => Some(Refusal::Faulted(
+                self.snap
+                    .message
+                    .as_deref()
+                    .and_then(|m| m.lines().next())
+                    .unwrap_or("fault")
+                    .to_string(),
+            )),
+            _ => None,
+        }
+    }
+
+    fn start_program(&mut self, reply: Option<Reply>) {
+        let refused = self
+            .refusal()
+            .or_else(|| self.program_path.is_none().then_some(Refusal::NoProgram));
+        let ok = refused.is_none();
+        match reply {
+            Some(r) => {
+                let _ = r.send(refused.map_or(Ok(()), Err));
+            }
+            None => {
+                if let Some(r) = refused {
+                    tracing::warn!("start refused: {r}");
+                }
+            }
+        }
+        if ok && let Some(path) = self.program_path.clone() {
+            self.snap.manual = None;
+            self.run_program(&path);
+        }
+    }
+
+    /// Carries out a manual operation: refused with the reason, or accepted and run.
+    fn manual(&mut self, op: ManualOp, reply: Reply) {
+        if let Some(r) = self.refusal() {
+            let _ = reply.send(Err(r));
+            return;
+        }
+        let described = describe(&op);
+        let program = match manual::program_for(&op, &self.config, &self.standing) {
+            Ok(p) => p,
+            Err(r) => {
+                let _ = reply.send(Err(r));
+                return;
+            }
+        };
+        let Some((name, text)) = program else {
+            let axis = match &op {
+                ManualOp::Home { axis } => axis.clone(),
+                _ => None,
+            };
+            self.home(axis.as_deref(), reply, described);
+            return;
+        };
+        let path = match manual::write_program(&self.scratch, name, &text) {
+            Ok(p) => p,
+            Err(r) => {
+                let _ = reply.send(Err(r));
+                return;
+            }
+        };
+        // The same test run a program gets, from where the axes stand: refused before
+        // anything moves, with the diagnostics.
+        let checked = crate::testrun::test_run(&path, &self.run_config());
+        if !checked.passed() {
+            let why = checked
+                .errors
+                .iter()
+                // The generated program's line numbers mean nothing to the operator.
+                .map(|d| d.message.clone())
+                .collect::<Vec<_>>()
+                .join("\n");
+            let _ = reply.send(Err(Refusal::Check(why)));
+            return;
+        }
+        let _ = reply.send(Ok(()));
+        tracing::info!(operation = %described, "manual operation");
+        self.snap.manual = Some(described);
+        self.run_program(&path);
+        // A manual move that ended normally leaves the machine idle, ready for the next.
+        if matches!(
+            self.snap.state,
+            MachineState::Finished | MachineState::Stopped
+        ) {
+            self.snap.state = MachineState::Idle;
+            self.publish();
+        }
+    }
+
+    /// Homes one axis or all with the backends' own sequences.
+    fn home(&mut self, axis: Option<&str>, reply: Reply, described: String) {
+        if self.config.needs_wall_clock() {
+            let _ = reply.send(Err(Refusal::Unsupported(
+                "homing drives on a bus or serial line from the dashboard is not supported yet"
+                    .into(),
+            )));
+            return;
+        }
+        let order = match manual::homing_order(&self.config, axis) {
+            Ok(o) => o,
+            Err(r) => {
+                let _ = reply.send(Err(r));
+                return;
+            }
+        };
+        let config = self.run_config();
+        let mut io = match MachineIo::open(&config) {
+            Ok(io) => io,
+            Err(e) => {
+                let _ = reply.send(Err(Refusal::Unsupported(e.to_string())));
+                return;
+            }
+        };
+        let _ = reply.send(Ok(()));
+        self.snap.manual = Some(described);
+        self.snap.state = MachineState::Running;
+        self.publish();
+        let letters = config.letters();
+        let homed = crate::state::home_axes(
+            &mut io,
+            &letters,
+            &order,
+            0.0,
+            config.servo_period,
+            HOMING_TIMEOUT,
+        );
+        let at: Vec<f64> = io.feedback().iter().map(|f| f.position).collect();
+        let referenced: Vec<bool> = io.feedback().iter().map(|f| f.homed).collect();
+        if let Err(e) = io.disable() {
+            tracing::warn!("disabling after homing: {e}");
+        }
+        self.standing.clone_from(&at);
+        self.snap.commanded.clone_from(&at);
+        self.snap.actual = at;
+        for &i in &order {
+            if let (Some(h), Some(&r)) = (self.homed.get_mut(i), referenced.get(i)) {
+                *h = r;
+            }
+        }
+        for (r, (&now, &before)) in self
+            .snap
+            .referenced
+            .iter_mut()
+            .zip(referenced.iter().zip(&self.homed))
+        {
+            *r = now || before || self.config.start_homed;
+        }
+        match homed {
+            Ok(_) => {
+                self.snap.state = MachineState::Idle;
+                self.snap.message = None;
+            }
+            Err(e) => {
+                self.snap.state = MachineState::Fault;
+                self.snap.message = Some(format!("homing: {e}"));
+            }
+        }
+        self.publish();
     }
 
     fn idle_command(&mut self, command: Command) {
         match command {
             Command::Load { name, path } => {
+                // A fault stays until it is acknowledged; loading does not hide it.
+                if self.snap.state != MachineState::Fault {
+                    self.snap.state = MachineState::Idle;
+                    self.snap.message = None;
+                }
                 self.snap.program = Some(name);
                 self.program_path = Some(path);
+                self.snap.line = 0;
+                self.snap.blocks = 0;
+                self.snap.t = 0.0;
+                self.snap.manual = None;
+            }
+            Command::Reset(reply) => {
                 self.snap.state = MachineState::Idle;
                 self.snap.message = None;
                 self.snap.line = 0;
+                let _ = reply.send(Ok(()));
             }
             Command::Override(f) => {
                 if f.is_finite() {
@@ -239,7 +462,9 @@ impl MachineLoop {
                 }
             }
             Command::SingleBlock(on) => self.snap.single_block = on,
-            Command::Start | Command::Hold | Command::Resume | Command::Stop => {}
+            Command::Hold | Command::Resume | Command::Stop => {}
+            Command::Start(reply) => self.start_program(reply),
+            Command::Manual(op, reply) => self.manual(op, reply),
         }
         self.publish();
     }
@@ -256,20 +481,19 @@ impl MachineLoop {
 
     /// Runs the loaded program on the wall clock until it ends, taking commands between
     /// servo cycles.
-    fn run_program(&mut self) {
-        let Some(path) = self.program_path.clone() else {
-            self.snap.state = MachineState::Error;
-            self.snap.message = Some("no program loaded".into());
-            self.publish();
-            return;
-        };
-        let config = self.config.clone();
+    fn run_program(&mut self, path: &Path) {
+        let path = path.to_path_buf();
+        let config = self.run_config();
         let options = RunOptions {
             realtime: true,
             trace: None,
         };
         self.snap.message = None;
         self.snap.trail.clear();
+        // Running from here on (the test run and the start included): the web side refuses
+        // loading and replacing the program from now.
+        self.snap.state = MachineState::Running;
+        self.publish();
         let mut run = match Run::start(&path, &config, options) {
             Ok(r) => r,
             Err(f) => {
@@ -290,6 +514,7 @@ impl MachineLoop {
         let mut last_publish = Instant::now();
         let mut last_trail_t = f64::NEG_INFINITY;
         let mut last_line = 0u32;
+        let mut last_actual = self.standing.clone();
         let outcome = loop {
             match self.commands.try_recv() {
                 Ok(c) => self.run_command(&mut run, c),
@@ -312,12 +537,20 @@ impl MachineLoop {
             let done = !matches!(stepped, Ok(true));
             if done || last_publish.elapsed() >= PUBLISH_PERIOD {
                 self.fill(&status, &derivatives, MachineState::Running);
+                if self.snap.manual.is_some() {
+                    // A manual move has no line in the loaded program.
+                    self.snap.line = 0;
+                }
                 if status.held {
                     self.snap.state = MachineState::Held;
                 }
                 self.publish();
                 last_publish = Instant::now();
             }
+            // At rest the drives hold the commanded position; after a fault the measured
+            // one counts (see below).
+            self.standing.clone_from(&status.commanded);
+            last_actual.clone_from(&status.actual);
             match stepped {
                 Ok(true) => {}
                 Ok(false) => break None,
@@ -329,6 +562,10 @@ impl MachineLoop {
             Err(f) => (Some(f.error), f.report.stop, f.report.spindle_warning),
         };
         self.end_with(error, &path);
+        if self.snap.state == MachineState::Fault {
+            // A quick stop brakes in the drives, off the commanded path.
+            self.standing = last_actual;
+        }
         // How the safety monitor brought the machine to rest, under the fault message.
         if let Some(stop) = stop
             && matches!(self.snap.state, MachineState::Fault | MachineState::Error)
@@ -360,8 +597,11 @@ impl MachineLoop {
                 self.feed_override = run.set_feed_override(f);
             }
             Command::SingleBlock(on) => self.snap.single_block = on,
-            // Loading or starting while a program runs waits for the run to end.
-            Command::Load { .. } | Command::Start => {
+            Command::Start(Some(reply)) | Command::Manual(_, reply) | Command::Reset(reply) => {
+                let _ = reply.send(Err(Refusal::Busy));
+            }
+            // Loading while a program runs is refused by the API; a late one is dropped.
+            Command::Load { .. } | Command::Start(None) => {
                 tracing::warn!("ignored while a program runs: {command:?}");
             }
         }
@@ -409,7 +649,9 @@ impl MachineLoop {
         }
         self.snap.state = state;
         self.snap.message = message;
+        // At rest: no speed, no spindle (every run stops the spindle at its end).
         self.snap.path_speed = 0.0;
+        self.snap.spindle_rpm = self.config.spindle.as_ref().map(|_| 0.0);
         self.snap.velocity.iter_mut().for_each(|v| *v = 0.0);
         self.snap.acceleration.iter_mut().for_each(|v| *v = 0.0);
         self.publish();
@@ -453,7 +695,21 @@ pub fn idle_snapshot(config: &MachineConfig) -> Snapshot {
         single_block: false,
         spindle_rpm: None,
         message: None,
+        manual: None,
         trail: Vec::new(),
+    }
+}
+
+/// An operation in words for the page and the log.
+fn describe(op: &ManualOp) -> String {
+    match op {
+        ManualOp::Jog { axis, distance, .. } => format!("jog {axis} {distance:+.3}"),
+        ManualOp::JogContinuous {
+            axis, direction, ..
+        } => format!("jog {axis} {}", if *direction > 0.0 { "+" } else { "-" }),
+        ManualOp::Home { axis: Some(a) } => format!("home {a}"),
+        ManualOp::Home { axis: None } => "home all".into(),
+        ManualOp::Mdi { block } => format!("MDI {}", block.trim()),
     }
 }
 

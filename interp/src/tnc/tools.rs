@@ -93,6 +93,11 @@ impl ToolTable {
         self.tools.get(&number)
     }
 
+    /// The tools in order of their numbers.
+    pub fn iter(&self) -> impl Iterator<Item = &Tool> {
+        self.tools.values()
+    }
+
     /// The number of the first tool with this name (names compare case-insensitively).
     pub fn number_of(&self, name: &str) -> Option<u32> {
         self.tools
