@@ -185,12 +185,22 @@ pub fn peak_speed(x: &Motion, jerk: f64) -> f64 {
 /// its knee with zero acceleration, so the chain is a motion the actions can follow.
 /// Infinite when the grip leaves no acceleration at the start.
 pub fn brake_distance(x: &Motion, target: f64, grip: &Grip, jerk: f64) -> f64 {
+    brake_distance_within(x, target, grip, jerk, f64::NEG_INFINITY)
+}
+
+/// [`brake_distance`], or, when that is at most `enough`, possibly a larger value that is
+/// still at most `enough`: the single ramp is tried first and the chain skipped when it
+/// already fits (a check against the distance left needs no more).
+fn brake_distance_within(x: &Motion, target: f64, grip: &Grip, jerk: f64, enough: f64) -> f64 {
     let top = peak_speed(x, jerk);
     let first = grip.at(top);
     if first <= 0.0 {
         return f64::INFINITY;
     }
     let single = Ramp::new(x.v, x.a, target, first, jerk).distance();
+    if single <= enough {
+        return single;
+    }
     let mut knees = KNEE_SHARES
         .iter()
         .filter_map(|&f| grip.knee(f))
@@ -279,9 +289,15 @@ pub(super) fn eased_by(x: &Motion, distance: f64, jerk: f64) -> Motion {
 /// Distance `x` needs to slow down to the speed of limit `l` ahead ([`brake_distance`] with
 /// `share` of its grip and jerk); where [`easing_for`] allows, a positive acceleration is
 /// first brought down with the window's jerk, as far as that jerk holds.
-fn brake_need(x: &Motion, l: &Limit, w: &Window, share: f64) -> f64 {
+///
+/// When the need is at most `enough`, the value returned may be any at most `enough`: the
+/// first estimate that fits ends the search (see [`brake_distance_within`]).
+fn brake_need(x: &Motion, l: &Limit, w: &Window, share: f64, enough: f64) -> f64 {
     let (grip, jerk) = (l.grip.scaled(share), l.jerk * share);
-    let single = brake_distance(x, l.speed, &grip, jerk);
+    let single = brake_distance_within(x, l.speed, &grip, jerk, enough);
+    if single <= enough {
+        return single;
+    }
     let Some((fast, until)) = easing_for(x, l, w) else {
         return single;
     };
@@ -316,7 +332,7 @@ fn misses(x: &Motion, l: &Limit, w: &Window) -> (f64, f64) {
     let too_fast = if slowing {
         // A stop is judged with the full limits: the path arrives there exactly.
         let share = if l.speed > 0.0 { JUDGE } else { 1.0 };
-        ratio(brake_need(x, l, w, share))
+        ratio(brake_need(x, l, w, share, slack + DISTANCE_SLACK))
     } else {
         0.0
     };

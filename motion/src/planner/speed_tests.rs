@@ -67,7 +67,7 @@ fn the_braking_need_does_not_jump_where_the_easing_reaches_a_drop_in_jerk() {
             v: 20.0,
             a: 200.0,
         };
-        s + brake_need(&x, &far, &w, JUDGE)
+        s + brake_need(&x, &far, &w, JUDGE, f64::NEG_INFINITY)
     };
     let (mut crossed, mut prev) = (false, ends(1.0));
     for k in 1..=1500 {
