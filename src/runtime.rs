@@ -34,6 +34,7 @@ mod settle;
 mod spindle;
 mod stop;
 pub mod stream;
+pub(crate) mod sync;
 
 use crate::config::MachineConfig;
 use crate::latency::Pacer;

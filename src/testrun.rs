@@ -24,9 +24,10 @@ use crate::runtime::RunError;
 use crate::runtime::command::{CommandPath, refused_in_check};
 use crate::runtime::guard::Violation;
 use crate::runtime::stream::OpStream;
+use crate::runtime::sync::SyncProfile;
 use klar_interp::op::{SpindleDir, SpindleSpeed};
 use klar_interp::{AxisLetter, Diagnostic, Feed, Op, OpKind, Pose, SourceLoc};
-use klar_motion::{Planner, Step};
+use klar_motion::{Planner, Sample, Step};
 use std::path::Path;
 
 /// Slack on soft-limit comparisons, mm or degrees.
@@ -280,6 +281,11 @@ struct MachineChecks<'a> {
     cycles: u64,
     /// The block where the test run gave up (see [`TestRunReport::gave_up`]).
     gave_up: Option<Diagnostic>,
+    /// The main spindle's commanded speed, signed rpm (0 stopped or unknown), as the
+    /// interpreter reads ahead.
+    rpm: f64,
+    /// The same where the planner's events have reached.
+    event_rpm: f64,
 }
 
 impl<'a> MachineChecks<'a> {
@@ -300,6 +306,8 @@ impl<'a> MachineChecks<'a> {
             limits,
             cycles: 0,
             gave_up: None,
+            rpm: 0.0,
+            event_rpm: 0.0,
         }
     }
 
@@ -355,7 +363,16 @@ impl<'a> MachineChecks<'a> {
             report.warnings.push(w);
         }
         match &op.kind {
+            OpKind::Spindle {
+                spindle: klar_interp::op::SpindleId::Main,
+                dir,
+                speed,
+            } => {
+                self.rpm = signed_rpm(*dir, *speed, self.config);
+                self.spindle(op.loc, *dir, *speed, report);
+            }
             OpKind::Spindle { dir, speed, .. } => self.spindle(op.loc, *dir, *speed, report),
+            OpKind::SpindleSync { .. } => self.spindle_sync(&op, report),
             OpKind::RadiusComp { side } if *side != klar_interp::CompSide::Off => {
                 if let Some((tool, radius)) = self.tool
                     && tool != 0
@@ -489,6 +506,33 @@ impl<'a> MachineChecks<'a> {
         }
     }
 
+    /// A thread pass: the spindle must measure its angle, turn, and the axes must follow the
+    /// pitch at its speed.
+    fn spindle_sync(&self, op: &Op, report: &mut TestRunReport) {
+        use crate::config::SpindleBackendConfig;
+        let why = match self.config.spindle.as_ref().map(|s| &s.backend) {
+            None => Some("this machine has no spindle: it cannot cut threads".to_string()),
+            Some(SpindleBackendConfig::Modbus(_)) => Some(
+                "the spindle is a Modbus VFD, which measures no spindle angle: threading \
+                 needs a spindle with an encoder"
+                    .to_string(),
+            ),
+            Some(SpindleBackendConfig::Canopen(_)) => Some(
+                "the CANopen spindle drive's position (0x6064) is not read yet: threading \
+                 needs a spindle whose angle klar measures"
+                    .to_string(),
+            ),
+            Some(SpindleBackendConfig::Sim(_)) => None,
+        };
+        let why = why.or_else(|| match SyncProfile::new(&op.kind, self.rpm, self.config) {
+            Some(Err(e)) => Some(e),
+            _ => None,
+        });
+        if let Some(message) = why {
+            self.error(report, op.loc, message);
+        }
+    }
+
     /// A warning when a programmed feed is above what the moved axes allow.
     fn feed_warning(&self, op: &Op) -> Option<Diagnostic> {
         let (from, to, feed) = match &op.kind {
@@ -578,7 +622,14 @@ impl<'a> MachineChecks<'a> {
                 let Some(step) = planner.next_step() else {
                     break;
                 };
-                follow(&mut self.command, self.path, &step, report);
+                follow(
+                    &mut self.command,
+                    self.path,
+                    &step,
+                    report,
+                    &mut self.event_rpm,
+                    self.config,
+                );
                 if self.over_limit(&step, report) {
                     return;
                 }
@@ -592,7 +643,14 @@ impl<'a> MachineChecks<'a> {
         };
         planner.finish();
         while let Some(step) = self.planner.as_mut().and_then(Planner::next_step) {
-            follow(&mut self.command, self.path, &step, report);
+            follow(
+                &mut self.command,
+                self.path,
+                &step,
+                report,
+                &mut self.event_rpm,
+                self.config,
+            );
             if self.over_limit(&step, report) {
                 break;
             }
@@ -605,12 +663,30 @@ impl<'a> MachineChecks<'a> {
 /// The run stops at the first setpoint the guard refuses, so the setpoint checks stop there
 /// too; a soft-limit refusal at a line whose move the travel check has already reported is
 /// the same problem and is not said twice.
-fn follow(command: &mut Option<CommandPath>, path: &Path, step: &Step, report: &mut TestRunReport) {
+fn follow(
+    command: &mut Option<CommandPath>,
+    path: &Path,
+    step: &Step,
+    report: &mut TestRunReport,
+    rpm: &mut f64,
+    config: &MachineConfig,
+) {
     let sample = match step {
         Step::Sample(s) => s,
         Step::Event(op) => {
             if let Some(c) = command {
                 c.event(op);
+            }
+            if let OpKind::Spindle {
+                spindle: klar_interp::op::SpindleId::Main,
+                dir,
+                speed,
+            } = &op.kind
+            {
+                *rpm = signed_rpm(*dir, *speed, config);
+            }
+            if let Some(Ok(profile)) = SyncProfile::new(&op.kind, *rpm, config) {
+                follow_sync(command, path, op.loc, report, &profile, *rpm, config);
             }
             return;
         }
@@ -631,6 +707,60 @@ fn follow(command: &mut Option<CommandPath>, path: &Path, step: &Step, report: &
         report.errors.push(refused_in_check(path, sample.loc, &v));
     }
     *command = None;
+}
+
+/// The main spindle's signed speed after a spindle op; under constant surface speed the
+/// machine's highest speed (the worst case for a thread pass).
+fn signed_rpm(dir: SpindleDir, speed: SpindleSpeed, config: &MachineConfig) -> f64 {
+    let rpm = match speed {
+        SpindleSpeed::Rpm(r) => r,
+        SpindleSpeed::SurfaceSpeed(_) => config.spindle.as_ref().map_or(0.0, |s| s.max_rpm),
+    };
+    match dir {
+        SpindleDir::Off => 0.0,
+        SpindleDir::Cw => rpm,
+        SpindleDir::Ccw => -rpm,
+    }
+}
+
+/// Follows a thread pass the way the run does at a steady spindle speed `rpm`: its setpoints
+/// go through the run's command path and guard.
+fn follow_sync(
+    command: &mut Option<CommandPath>,
+    path: &Path,
+    loc: SourceLoc,
+    report: &mut TestRunReport,
+    profile: &SyncProfile,
+    rpm: f64,
+    config: &MachineConfig,
+) {
+    let Some(c) = command else {
+        return;
+    };
+    let w = rpm.abs() * 6.0;
+    let step = w * config.servo_period;
+    let total = profile.total_degrees();
+    let mut k = 1.0;
+    loop {
+        let phi = (k * step).min(total);
+        let (s, rate) = profile.at(phi);
+        let sample = Sample {
+            t: report.planned_time,
+            pose: profile.pose(s),
+            velocity: profile.velocity(rate, w),
+            acceleration: [0.0; 9],
+            loc,
+        };
+        if let Err(v) = c.positions(&sample, sample.t) {
+            report.errors.push(refused_in_check(path, loc, &v));
+            *command = None;
+            return;
+        }
+        if phi >= total {
+            return;
+        }
+        k += 1.0;
+    }
 }
 
 /// A diagnostic for the block at `loc`, its message prefixed with the block number.

@@ -202,6 +202,18 @@ pub enum Feed {
     PerRevolution(f64),
 }
 
+/// Which travel a thread's pitch measures (DIN G33 `H`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ThreadLead {
+    /// Z travel per revolution (longitudinal and taper threads up to 45° from Z).
+    Z,
+    /// X travel (radius) per revolution (face threads and tapers steeper than 45°).
+    X,
+    /// Travel along the path per revolution.
+    Path,
+}
+
 /// A block-wise corner rule of radius compensation (TNC M97 / M98).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
@@ -535,6 +547,33 @@ pub enum OpKind {
         stop: bool,
         /// Seconds the machine waits after the function (with `stop` only).
         wait: f64,
+    },
+    /// A straight move position-locked to the main spindle's measured angle (a thread
+    /// pass): the path from `from` to `to` advances `pitch` mm of `lead` travel per spindle
+    /// revolution, accelerating over the run-in and braking over the run-out in step with
+    /// the spindle, and the spindle stands at `start_angle` when the run-in ends, so every
+    /// pass with the same start angle cuts the same groove. Feed override and feed hold do
+    /// not act on it. The planner stops exactly at `from` first.
+    SpindleSync {
+        /// Start (the previous end point).
+        from: Pose,
+        /// End point.
+        to: Pose,
+        /// Travel per spindle revolution, mm, measured as `lead` says.
+        pitch: f64,
+        /// Which travel the pitch measures.
+        lead: ThreadLead,
+        /// Spindle angle at the end of the run-in, degrees.
+        start_angle: f64,
+        /// Run-in length along the path, mm; `None`: the shortest the axes allow.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        run_in: Option<f64>,
+        /// Run-out length along the path, mm; `None`: the shortest the axes allow.
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        run_out: Option<f64>,
+        /// Chip cross-section the pass cuts, mm² (0 when the program does not say), for a
+        /// simulated spindle's load.
+        section: f64,
     },
     /// Program stop (M0, STOP) or optional stop (M1): motion halts until resumed.
     Stop {

@@ -15,6 +15,7 @@ impl Run<'_, '_> {
                 dir,
                 speed,
             } => self.spindle_command(op.loc, *dir, *speed),
+            OpKind::SpindleSync { .. } => self.spindle_sync(op),
             OpKind::Tcpm { .. } => {
                 self.command.event(op);
                 Ok(())

@@ -63,6 +63,8 @@ pub(crate) struct DinExec {
     pub blank: Option<Bar>,
     /// The FINISHED PART contour.
     pub contour: Contour,
+    /// What thread passes remember of the one before.
+    pub thread: super::thread::ThreadState,
 }
 
 const CYCLES: [u32; 5] = [71, 74, 36, 791, 793];
@@ -131,6 +133,7 @@ impl DinExec {
             face_contour: None,
             blank: None,
             contour: Contour::new(),
+            thread: Default::default(),
         }
     }
 
@@ -394,6 +397,7 @@ impl DinExec {
                 "G746",
             )),
             Some(793) => Some((&["ZS", "ZE", "P", "F"], "G793")),
+            Some(33) => Some((&super::thread::G33_WORDS[..], "G33")),
             Some(71 | 36) => Some((&["Z", "ZS", "ZE", "X", "XS", "XE", "F"], "G71/G36")),
             Some(74) => Some((
                 &["Z", "ZS", "ZE", "X", "XS", "XE", "P", "I", "B", "J", "F"],
@@ -478,6 +482,7 @@ impl DinExec {
                 }
             }
             Some(18) => {}
+            Some(33) => super::thread::g33(l, &mut self.thread, g, loc, out)?,
             Some(26) => l.speed_limit = g.value("S")?,
             Some(side @ (40..=42)) => {
                 let side = match side {

@@ -21,6 +21,7 @@ pub(crate) mod lathe;
 pub mod pattern;
 pub(crate) mod roughing;
 pub(crate) mod run;
+pub(crate) mod thread;
 pub mod tilt;
 pub mod unknown;
 

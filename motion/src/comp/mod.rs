@@ -363,6 +363,13 @@ impl Compensator {
                 self.route(Trail::Pass(op));
                 Ok(())
             }
+            OpKind::SpindleSync { to, .. } => {
+                // A thread pass is the tool tip's own path: it moves uncompensated, and the
+                // following moves start from its end.
+                self.pos = *to;
+                self.route(Trail::Pass(op));
+                Ok(())
+            }
             _ => {
                 self.route(Trail::Pass(op));
                 Ok(())

@@ -410,6 +410,27 @@ impl Planner {
                 self.add_event(op);
                 return Ok(());
             }
+            OpKind::SpindleSync { from, to, .. } => {
+                // The servo loop runs the move itself, geared to the spindle: the path stops
+                // exactly at its start, and goes on from its end once the event is done.
+                self.check_start(from, loc)?;
+                if !finite_pose(to) {
+                    return Err(MotionError::Discontinuity {
+                        loc,
+                        axis: AxisLetter::Z,
+                        gap: f64::NAN,
+                    });
+                }
+                let to = *to;
+                self.flush()?;
+                self.markers.push_back(Marker::Stop {
+                    at: self.committed_end,
+                    op: Some(op),
+                    dwell: 0.0,
+                });
+                self.planned_pose = to;
+                return Ok(());
+            }
             OpKind::Stop { .. }
             | OpKind::End
             | OpKind::ToolChange { .. }
@@ -592,6 +613,10 @@ impl Planner {
                             self.hold_until = Some((from + dwell, loc));
                         }
                         if let Some(op) = op {
+                            if let OpKind::SpindleSync { to, .. } = &op.kind {
+                                // The servo loop moves the axes to `to` during the event.
+                                self.reframe(*to);
+                            }
                             return Some(Step::Event(op));
                         }
                     }
