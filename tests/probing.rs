@@ -311,3 +311,70 @@ TCH PROBE 0.1 X+150 Y+0 Z+0
     close("lowest commanded Z", min_cmd, lowest, 1e-9);
     assert!(min_act >= lowest - 0.01, "measured Z went to {min_act}");
 }
+
+#[test]
+fn cycles_0_and_1_measure_from_their_pre_position() {
+    // cycle 0 down onto the top at X+30 Y+25 (program): the top is 0.25 mm low
+    let body = "TCH PROBE 0.0 REF. PLANE Q10 Z-
+TCH PROBE 0.1 X+30 Y+25 Z+5
+Q11 = Q117
+TCH PROBE 1.0 POLAR DATUM
+TCH PROBE 1.1 X ANGLE: +180
+TCH PROBE 1.2 X+60 Y+0 Z-10
+";
+    let (it, _) = run_body("probe0.h", body);
+    let ball = machine().probe_data().radius;
+    close("Q10", it.q(10), OFF[2], MM);
+    close("Q117 after cycle 0", it.q(11), OFF[2] + ball, MM);
+    // cycle 1 along −X from X+60 at Y 0: the part's +X face (q_x = 50) turned by 1.5° has
+    // the unit normal n = (cos, sin); the ball centre stops where n·p − n·(OFF + R(50, 0))
+    // equals the ball radius
+    let (s, c) = TURN.to_radians().sin_cos();
+    let touch_x = (ball + 50.0 + OFF[0] * c + OFF[1] * s) / c;
+    close("Q115 after cycle 1", it.q(115), touch_x, MM);
+}
+
+#[test]
+fn probing_errors_name_their_cause_at_their_block() {
+    let mill = MachineConfig::builtin_mill();
+    let path = common::temp_program(
+        "probe_nomachine.h",
+        &format!("{PRELUDE}{C400}M30\nEND PGM PROBE MM\n"),
+    );
+    let mut it = mill.open_program(&path, mill.start_pose()).expect("opens");
+    let err = it.find_map(Result::err).expect("refused without a probe");
+    assert_eq!(err.line, 6);
+    assert!(
+        err.message.contains("needs a touch probe"),
+        "{}",
+        err.message
+    );
+
+    let path = common::temp_program(
+        "probe_missing_q.h",
+        &format!("{PRELUDE}TCH PROBE 412 ~\n  Q322=+0 ~\n  Q262=+24\nM30\nEND PGM PROBE MM\n"),
+    );
+    let m = machine();
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let err = it.find_map(Result::err).expect("refused");
+    assert!(
+        err.message.contains("TCH PROBE 412 needs Q321"),
+        "{}",
+        err.message
+    );
+
+    // the pre-position of cycle 0 inside the part: the stylus touches before it moves
+    let path = common::temp_program(
+        "probe_inside.h",
+        &format!(
+            "{PRELUDE}TCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
+        ),
+    );
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let err = it.find_map(Result::err).expect("refused");
+    assert!(
+        err.message.contains("stylus already in contact"),
+        "{}",
+        err.message
+    );
+}
