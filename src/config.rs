@@ -21,9 +21,11 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 mod locate;
+mod probe;
 mod ranges;
 mod tables;
 mod validate;
+pub use probe::{BoreConfig, BossConfig, PocketConfig, ProbeConfig, WorkpieceConfig};
 pub use ranges::{MAX_PIVOT, MAX_SPINDLE_RPM, MAX_TRAVEL};
 pub use tables::ActivePreset;
 
@@ -343,6 +345,12 @@ pub struct MachineConfig {
     /// besides the ones klar defines.
     #[serde(default, rename = "m_function")]
     pub m_functions: Vec<MFunctionConfig>,
+    /// The touch probe's data (`[probe]`).
+    #[serde(default)]
+    pub probe: Option<ProbeConfig>,
+    /// A simulated part on the table for the touch probe to find (`[workpiece]`).
+    #[serde(default)]
+    pub workpiece: Option<WorkpieceConfig>,
 }
 
 /// A machine-dependent M function (door, clamping, chip conveyor, …), `[[m_function]]`.
@@ -574,7 +582,7 @@ impl MachineConfig {
             let t = &self.table_table;
             interp = interp.with_table_geometry(tilt, t.tilt_pivot, t.table_pivot);
         }
-        Ok(self.with_tables(interp))
+        Ok(self.with_probe(self.with_tables(interp)))
     }
 
     /// The start pose of this machine in program coordinates: each axis at its `start`.

@@ -20,3 +20,4 @@ pub mod serve;
 pub mod state;
 pub mod testrun;
 pub mod trace;
+pub mod workpiece;

@@ -64,12 +64,21 @@ fn every_program_plots_to_png_and_svg() {
     for p in progs {
         let stem = p.file_name().unwrap().to_string_lossy().replace('.', "_");
         let png = dir.join(format!("{stem}.png"));
-        plot_program(&p, start(), &png).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        // probing programs need the machine with the simulated probe and part
+        let text = std::fs::read_to_string(&p).unwrap_or_default();
+        let machine = text.contains("TCH PROBE").then(|| {
+            klar::config::MachineConfig::load(
+                &Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/probing-mill.toml"),
+            )
+            .expect("probing machine")
+        });
+        plot_program_with(&p, machine.as_ref(), start(), &png, None)
+            .unwrap_or_else(|e| panic!("{}: {e}", p.display()));
         let bytes = std::fs::read(&png).unwrap();
         assert_eq!(png_size(&bytes), (1400, 700), "{stem}");
 
         let svg = dir.join(format!("{stem}.svg"));
-        plot_program(&p, start(), &svg).unwrap();
+        plot_program_with(&p, machine.as_ref(), start(), &svg, None).unwrap();
         let text = std::fs::read_to_string(&svg).unwrap();
         assert!(
             text.trim_start().starts_with("<svg"),

@@ -21,6 +21,7 @@ impl MachineConfig {
             ));
         }
         positive("tolerance", self.tolerance)?;
+        self.validate_probe()?;
         if self.axes.is_empty() {
             return Err("a machine needs at least one [[axis]]".into());
         }

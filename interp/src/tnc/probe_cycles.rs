@@ -19,7 +19,9 @@
 //!   Q423 points, 4 unless given), Q365 how the probe travels between points at measuring
 //!   height (0: straight, 1: on an arc about the nominal centre). The circle through the
 //!   touch points (least squares for four or more) gives Q151/Q152 the centre and Q153 the
-//!   diameter.
+//!   diameter. klar fits the circle to the ball centres at the triggers and then adds (bore)
+//!   or takes off (boss) the ball radius: the ball centres lie on a concentric circle even
+//!   when the part is off its nominal centre and the ball meets the wall at a slant.
 //! - 410 … 413 with Q381=1 also probe the probe axis at Q382/Q383 (nominal height Q384) and
 //!   set the datum of that axis to Q333. The measured centre becomes Q331/Q332.
 //! - **431**: three points (Q263/Q264/Q294, Q265/Q266/Q295, Q296/Q297/Q298) probed downward
@@ -301,15 +303,23 @@ impl Machine {
             } else {
                 [-u[0], -u[1], 0.0]
             };
-            let t = self.touch_surface(dir, run, out)?;
+            // the ball centres of all touches lie on a circle concentric with the bore or
+            // boss whatever way the ball was moved: fitted before the ball radius is added
+            let t = self.probe_from_here(dir, run, out)?;
             pts.push([t[0], t[1]]);
         }
         self.tool_axis_datum(def, run, out)?;
         self.up_to(clear, run, out);
-        let (centre, radius) = fit_circle(&pts).ok_or(perr(ProbeError::Bad {
+        let (centre, ball_path) = fit_circle(&pts).ok_or(perr(ProbeError::Bad {
             cycle,
             what: "the touch points do not make a circle".into(),
         }))?;
+        let ball = self.probe.data.radius;
+        let radius = if inside {
+            ball_path + ball
+        } else {
+            ball_path - ball
+        };
         self.set_q(151, centre[0] / self.unit);
         self.set_q(152, centre[1] / self.unit);
         self.set_q(153, 2.0 * radius / self.unit);

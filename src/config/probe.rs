@@ -1,0 +1,239 @@
+//! `[probe]` and `[workpiece]`: the touch probe of the machine and the simulated part it
+//! finds. A machine with a `[workpiece]` gets a simulated probe (its data from `[probe]`, or
+//! klar's defaults); `TCH PROBE` cycles are refused on a machine without one.
+
+use super::MachineConfig;
+use crate::workpiece::{Bore, Boss, Pocket, SimWorkpiece};
+use klar_interp::{Interpreter, ProbeData};
+use serde::Deserialize;
+
+/// `[probe]`: the touch probe's data (the TNC's touch-probe table).
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ProbeConfig {
+    /// Stylus ball radius, mm.
+    #[serde(default = "default_radius")]
+    pub radius: f64,
+    /// Set-up clearance added to the cycles' Q320, mm.
+    #[serde(default = "default_set_up")]
+    pub set_up: f64,
+    /// Longest probing move, mm.
+    #[serde(default = "default_distance")]
+    pub distance: f64,
+    /// Probing feed, mm/min.
+    #[serde(default = "default_feed")]
+    pub feed: f64,
+    /// Positioning feed between touch points, mm/min; none: rapid traverse.
+    #[serde(default)]
+    pub positioning_feed: Option<f64>,
+}
+
+fn default_radius() -> f64 {
+    ProbeData::default().radius
+}
+fn default_set_up() -> f64 {
+    ProbeData::default().set_up
+}
+fn default_distance() -> f64 {
+    ProbeData::default().distance
+}
+fn default_feed() -> f64 {
+    ProbeData::default().feed
+}
+
+/// `[[workpiece.bore]]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BoreConfig {
+    /// Centre X, Y in program coordinates, mm.
+    pub centre: [f64; 2],
+    /// Diameter, mm.
+    pub diameter: f64,
+    /// Depth below the top of the part, mm.
+    pub depth: f64,
+}
+
+/// `[[workpiece.pocket]]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PocketConfig {
+    /// Centre X, Y in program coordinates, mm.
+    pub centre: [f64; 2],
+    /// Side lengths in X and Y, mm.
+    pub size: [f64; 2],
+    /// Depth below the top of the part, mm.
+    pub depth: f64,
+}
+
+/// `[[workpiece.boss]]`.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BossConfig {
+    /// Centre X, Y in program coordinates, mm.
+    pub centre: [f64; 2],
+    /// Diameter, mm.
+    pub diameter: f64,
+    /// Height above the top of the part, mm.
+    pub height: f64,
+}
+
+/// `[workpiece]`: the simulated part on the table.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorkpieceConfig {
+    /// How far the part really lies off where the program expects it, X, Y, Z, mm.
+    #[serde(default)]
+    pub offset: [f64; 3],
+    /// How far it is turned about Z (about the program's datum), degrees.
+    #[serde(default)]
+    pub rotation: f64,
+    /// The part's box corners in program coordinates; without them the program's BLK FORM.
+    #[serde(default)]
+    pub min: Option<[f64; 3]>,
+    /// The other corner.
+    #[serde(default)]
+    pub max: Option<[f64; 3]>,
+    /// Bores cut from the top.
+    #[serde(default, rename = "bore")]
+    pub bores: Vec<BoreConfig>,
+    /// Rectangular pockets cut from the top.
+    #[serde(default, rename = "pocket")]
+    pub pockets: Vec<PocketConfig>,
+    /// Round bosses standing on the top.
+    #[serde(default, rename = "boss")]
+    pub bosses: Vec<BossConfig>,
+}
+
+impl MachineConfig {
+    /// The probe's data from `[probe]` (klar's defaults without it).
+    pub fn probe_data(&self) -> ProbeData {
+        match &self.probe {
+            Some(p) => ProbeData {
+                radius: p.radius,
+                set_up: p.set_up,
+                distance: p.distance,
+                feed: p.feed,
+                positioning_feed: p.positioning_feed,
+            },
+            None => ProbeData::default(),
+        }
+    }
+
+    /// The simulated part of `[workpiece]`, placed from the start preset.
+    pub fn sim_workpiece(&self) -> Option<SimWorkpiece> {
+        let w = self.workpiece.as_ref()?;
+        let origin = match self.active_preset() {
+            Ok(super::tables::ActivePreset::Row { values, .. }) => {
+                [values[0], values[1], values[2]]
+            }
+            _ => [0.0; 3],
+        };
+        let body = match (w.min, w.max) {
+            (Some(a), Some(b)) => Some([
+                [a[0].min(b[0]), a[1].min(b[1]), a[2].min(b[2])],
+                [a[0].max(b[0]), a[1].max(b[1]), a[2].max(b[2])],
+            ]),
+            _ => None,
+        };
+        Some(SimWorkpiece {
+            origin,
+            offset: w.offset,
+            rotation: w.rotation,
+            body,
+            bores: w
+                .bores
+                .iter()
+                .map(|b| Bore {
+                    centre: b.centre,
+                    diameter: b.diameter,
+                    depth: b.depth,
+                })
+                .collect(),
+            pockets: w
+                .pockets
+                .iter()
+                .map(|p| Pocket {
+                    centre: p.centre,
+                    size: p.size,
+                    depth: p.depth,
+                })
+                .collect(),
+            bosses: w
+                .bosses
+                .iter()
+                .map(|b| Boss {
+                    centre: b.centre,
+                    diameter: b.diameter,
+                    height: b.height,
+                })
+                .collect(),
+        })
+    }
+
+    /// `interp` given the simulated probe when the machine has a `[workpiece]`.
+    pub(super) fn with_probe(&self, interp: Interpreter) -> Interpreter {
+        match self.sim_workpiece() {
+            Some(w) => interp.with_probe(self.probe_data(), Box::new(w)),
+            None => interp,
+        }
+    }
+
+    /// Checks `[probe]` and `[workpiece]` values.
+    pub(super) fn validate_probe(&self) -> Result<(), String> {
+        let positive = |what: &str, v: f64| {
+            if v.is_finite() && v > 0.0 && v <= 10_000.0 {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{what} must be a positive number up to 10000, got {v}"
+                ))
+            }
+        };
+        if let Some(p) = &self.probe {
+            positive("probe radius", p.radius)?;
+            positive("probe distance", p.distance)?;
+            positive("probe feed", p.feed)?;
+            if !(p.set_up.is_finite() && (0.0..=10_000.0).contains(&p.set_up)) {
+                return Err(format!(
+                    "probe set_up must lie in 0 … 10000 mm, got {}",
+                    p.set_up
+                ));
+            }
+            if let Some(f) = p.positioning_feed {
+                positive("probe positioning_feed", f)?;
+            }
+        }
+        if let Some(w) = &self.workpiece {
+            let finite = w
+                .offset
+                .iter()
+                .chain(&[w.rotation])
+                .all(|v| v.is_finite() && v.abs() <= 1e6);
+            if !finite {
+                return Err("workpiece offset and rotation must be finite numbers".into());
+            }
+            if w.min.is_some() != w.max.is_some() {
+                return Err(
+                    "workpiece needs both min and max, or neither (then the program's BLK FORM)"
+                        .into(),
+                );
+            }
+            for (i, b) in w.bores.iter().enumerate() {
+                positive(&format!("workpiece bore {} diameter", i + 1), b.diameter)?;
+                positive(&format!("workpiece bore {} depth", i + 1), b.depth)?;
+            }
+            for (i, b) in w.bosses.iter().enumerate() {
+                positive(&format!("workpiece boss {} diameter", i + 1), b.diameter)?;
+                positive(&format!("workpiece boss {} height", i + 1), b.height)?;
+            }
+            for (i, p) in w.pockets.iter().enumerate() {
+                positive(
+                    &format!("workpiece pocket {} size", i + 1),
+                    p.size[0].min(p.size[1]),
+                )?;
+                positive(&format!("workpiece pocket {} depth", i + 1), p.depth)?;
+            }
+        }
+        Ok(())
+    }
+}
