@@ -7,6 +7,9 @@
 //! Needs `/usr/bin/chromium` and `/usr/bin/chromedriver` (scripts/setup-browser.sh installs
 //! them). Screenshots go to `target/tmp/browser/`.
 
+#[path = "browser/manual.rs"]
+mod manual;
+
 use fantoccini::{Client, ClientBuilder, Locator};
 use std::io::{BufRead, BufReader};
 use std::net::TcpListener;
@@ -45,12 +48,18 @@ fn spawn_group(cmd: &mut Command, name: &'static str) -> Guard {
     Guard { child, name }
 }
 
-/// `klar serve` on a free port; returns the guard and the page's URL.
+/// `klar serve` on a free port over the repository's programs; returns the guard and the
+/// page's URL.
 fn start_server(machine: Option<&Path>) -> (Guard, String) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    start_server_on(machine, &root.join("programs"))
+}
+
+/// `klar serve` on a free port over the programs in `programs`.
+fn start_server_on(machine: Option<&Path>, programs: &Path) -> (Guard, String) {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_klar"));
     cmd.args(["serve", "--port", "0", "--programs"])
-        .arg(root.join("programs"))
+        .arg(programs)
         .stdout(Stdio::piped())
         .stderr(Stdio::inherit());
     if let Some(m) = machine {
@@ -274,6 +283,10 @@ async fn dashboard_runs_holds_resumes_overrides_and_shows_a_fault() {
     tokio::time::timeout(Duration::from_secs(240), scenario())
         .await
         .expect("the browser test finished in time");
+    // One browser at a time: the manual-operation scenario after the first.
+    tokio::time::timeout(Duration::from_secs(240), manual::scenario())
+        .await
+        .expect("the manual-operation browser test finished in time");
 }
 
 async fn scenario() {

@@ -15,7 +15,11 @@ const state = {
   view: "iso",
   runT: -1,
   shownProgram: null,
-
+  stock: null,      // BLK FORM [[min], [max]] or null
+  ends: {},         // program line -> [x, y, z] where its motion ends
+  machineTime: 0,   // the test run's planned machine time of the shown program, s
+  online: false,
+  toScreen: null,
 };
 
 const $ = (id) => document.getElementById(id);
@@ -76,10 +80,33 @@ async function showProgram(name) {
     box.appendChild(div);
   });
   state.planned = view.path;
+  state.stock = view.stock;
+  state.ends = view.ends || {};
+  state.machineTime = view.machine_time || 0;
   state.trail = [];
   state.currentLine = 0;
-  if (view.errors.length) showMessage(view.errors.join("\n"));
+  showDiagnostics(view.diagnostics || []);
+  $("total-time").textContent = state.machineTime ? state.machineTime.toFixed(1) : "—";
   drawToolpath();
+}
+
+// The test run's findings: the lines marked in the text, the list above it.
+function showDiagnostics(diags) {
+  const box = $("diagnostics");
+  box.innerHTML = "";
+  for (const d of diags) {
+    const line = $("L" + d.line);
+    if (line) {
+      line.classList.add(d.error ? "err" : "warn");
+      line.title = (line.title ? line.title + "\n" : "") + d.message;
+    }
+    const div = document.createElement("div");
+    div.className = d.error ? "err" : "warn";
+    div.textContent = `line ${d.line}:${d.col}: ${d.message}`;
+    div.addEventListener("click", () => { const l = $("L" + d.line); if (l) l.scrollIntoView({ block: "center" }); });
+    box.appendChild(div);
+  }
+  box.hidden = diags.length === 0;
 }
 
 $("load").addEventListener("click", async () => {
@@ -88,6 +115,16 @@ $("load").addEventListener("click", async () => {
   showMessage("");
   await api("POST", "/api/load", { name });
   await showProgram(name);
+});
+
+$("upload").addEventListener("click", async () => {
+  const file = $("upload-file").files[0];
+  if (!file) { showMessage("choose a program file to upload first"); return; }
+  showMessage("");
+  const text = await file.text();
+  await api("POST", "/api/upload", { name: file.name, text });
+  await loadProgramList();
+  $("program-select").value = file.name;
 });
 
 // ---- controls ---------------------------------------------------------------------------
@@ -101,6 +138,41 @@ $("start").addEventListener("click", () => {
 $("hold").addEventListener("click", () => api("POST", "/api/hold"));
 $("resume").addEventListener("click", () => api("POST", "/api/resume"));
 $("stop").addEventListener("click", () => api("POST", "/api/stop"));
+$("reset").addEventListener("click", () => { showMessage(""); api("POST", "/api/reset"); });
+
+// ---- manual operation -------------------------------------------------------------------
+
+const jogSpeed = () => Number($("jog-speed").value);
+function jogBy(sign) {
+  showMessage("");
+  api("POST", "/api/jog", { axis: $("jog-axis").value, distance: sign * Number($("jog-step").value), speed: jogSpeed() });
+}
+$("jog-minus").addEventListener("click", () => jogBy(-1));
+$("jog-plus").addEventListener("click", () => jogBy(1));
+// Continuous jog: moves while the button is held, stops when it is let go.
+for (const [id, direction] of [["jog-cont-minus", -1], ["jog-cont-plus", 1]]) {
+  const b = $(id);
+  let moving = false;
+  b.addEventListener("pointerdown", () => {
+    showMessage("");
+    moving = true;
+    api("POST", "/api/jog", { axis: $("jog-axis").value, direction, speed: jogSpeed() }).catch(() => { moving = false; });
+  });
+  const release = () => { if (moving) { moving = false; api("POST", "/api/stop"); } };
+  b.addEventListener("pointerup", release);
+  b.addEventListener("pointerleave", release);
+  b.addEventListener("pointercancel", release);
+}
+$("home-axis").addEventListener("click", () => { showMessage(""); api("POST", "/api/home", { axis: $("jog-axis").value }); });
+$("home-all").addEventListener("click", () => { showMessage(""); api("POST", "/api/home"); });
+function runMdi() {
+  const block = $("mdi-block").value.trim();
+  if (!block) return;
+  showMessage("");
+  api("POST", "/api/mdi", { block });
+}
+$("mdi-run").addEventListener("click", runMdi);
+$("mdi-block").addEventListener("keydown", (e) => { if (e.key === "Enter") runMdi(); });
 $("single-block").addEventListener("change", (e) => api("POST", "/api/single_block", { on: e.target.checked }));
 $("override").addEventListener("input", (e) => {
   $("override-value").textContent = e.target.value + " %";
@@ -108,7 +180,7 @@ $("override").addEventListener("input", (e) => {
 });
 $("clear-trail").addEventListener("click", () => { state.trail = []; drawToolpath(); });
 for (const r of document.querySelectorAll("input[name=view]")) {
-  r.addEventListener("change", (e) => { state.view = e.target.value; drawToolpath(); });
+  r.addEventListener("change", (e) => { state.view = e.target.value; setViewPreset(state.view); drawToolpath(); });
 }
 
 // ---- live snapshots ---------------------------------------------------------------------
@@ -118,10 +190,19 @@ function buildDro(letters) {
   body.innerHTML = "";
   for (const l of letters) {
     const tr = document.createElement("tr");
-    tr.innerHTML = `<td class="letter" id="ref-${l}">${l}</td><td id="cmd-${l}"></td><td id="act-${l}"></td><td class="fe" id="fe-${l}"></td>`;
+    tr.innerHTML = `<td class="letter" id="ref-${l}">${l}</td><td id="cmd-${l}"></td><td id="act-${l}"></td><td class="togo" id="togo-${l}"></td><td class="fe" id="fe-${l}"></td>`;
     body.appendChild(tr);
   }
   state.letters = letters;
+  const sel = $("jog-axis");
+  const was = sel.value;
+  sel.innerHTML = "";
+  for (const l of letters) {
+    const o = document.createElement("option");
+    o.value = l; o.textContent = l;
+    sel.appendChild(o);
+  }
+  if (letters.includes(was)) sel.value = was;
 }
 
 function fmt(v, digits) { return (v >= 0 ? "+" : "") + v.toFixed(digits); }
@@ -139,6 +220,20 @@ function applySnapshot(s) {
     cell.classList.toggle("unreferenced", !referenced);
     cell.title = referenced ? "referenced" : "not referenced";
   });
+  // Distance to go: from where the axes stand to the end of the executing block's motion.
+  const end = !s.manual && (s.state === "running" || s.state === "held") ? state.ends[s.line] : null;
+  s.letters.forEach((l, i) => {
+    const k = ["X", "Y", "Z"].indexOf(l);
+    $("togo-" + l).textContent = end && k >= 0 ? fmt(end[k] - s.actual[i], 3) : "";
+  });
+  // Progress by machine time against the test run's planned machine time.
+  const total = s.manual ? 0 : state.machineTime;
+  const running = s.state === "running" || s.state === "held";
+  const done = s.state === "finished" ? 1 : (total > 0 ? Math.min(1, s.t / total) : 0);
+  $("progress").value = running || s.state === "finished" ? done : 0;
+  $("progress-pct").textContent = Math.round(100 * $("progress").value);
+  $("remaining").textContent = total > 0 && running ? Math.max(0, total - s.t).toFixed(1) : "—";
+  $("manual-op").textContent = s.manual ? "manual: " + s.manual : "";
   $("state").textContent = s.state;
   $("line-no").textContent = s.line;
   $("time").textContent = s.t.toFixed(3);
@@ -170,87 +265,60 @@ function applySnapshot(s) {
     while (state.history.length && state.history[0].t < s.t - HISTORY_SECONDS) state.history.shift();
   }
   state.lastSnapshot = s;
+  updateButtons();
   drawToolpath();
   drawSpeedPlot();
+}
+
+// Every control enabled only when it acts in the machine's state; none without the server.
+function updateButtons() {
+  const s = state.lastSnapshot;
+  const st = s ? s.state : "offline";
+  const on = state.online && s;
+  const moving = st === "running" || st === "held";
+  const fault = st === "fault";
+  const enable = {
+    start: on && !moving && !fault && !!s.program && !!$("program-select").options.length,
+    hold: on && st === "running",
+    resume: on && st === "held",
+    stop: on && moving,
+    reset: on && (fault || st === "error"),
+    load: on && !moving,
+    upload: on && !moving,
+  };
+  for (const id of ["jog-minus", "jog-plus", "jog-cont-minus", "jog-cont-plus", "home-axis", "home-all", "mdi-run"]) {
+    enable[id] = on && !moving && !fault;
+  }
+  // A continuous jog's own button stays usable while it moves: letting go stops it.
+  if (on && st === "running" && s.manual && s.manual.startsWith("jog") && !/\d/.test(s.manual)) {
+    enable["jog-cont-minus"] = enable["jog-cont-plus"] = true;
+  }
+  for (const [id, ok] of Object.entries(enable)) $(id).disabled = !ok;
+  document.body.classList.toggle("offline", !state.online);
 }
 
 function connect() {
   const proto = location.protocol === "https:" ? "wss://" : "ws://";
   const ws = new WebSocket(withToken(proto + location.host + "/ws"));
-  ws.onopen = () => { $("link").textContent = "live"; $("link").className = "link up"; };
+  ws.onopen = () => {
+    state.online = true;
+    $("link").textContent = "live"; $("link").className = "link up";
+    updateButtons();
+  };
   ws.onmessage = (ev) => applySnapshot(JSON.parse(ev.data));
   ws.onclose = () => {
+    // Whatever the page showed is no longer known: say so instead of the last state.
+    state.online = false;
     $("link").textContent = "offline"; $("link").className = "link down";
+    $("state").textContent = "no connection to the server";
+    $("path-speed").textContent = "—";
+    $("spindle").textContent = "—";
+    updateButtons();
     setTimeout(connect, 1000);
   };
 }
 
-// ---- drawing ------------------------------------------------------------------------------
-
-function project(p) {
-  const [x, y, z] = p;
-  switch (state.view) {
-    case "top": return [x, y];
-    case "front": return [x, z];
-    default: {
-      const c = Math.cos(Math.PI / 6), s = Math.sin(Math.PI / 6);
-      return [(x - y) * c, (x + y) * s + z];
-    }
-  }
-}
-
-function drawToolpath() {
-  const cv = $("toolpath");
-  const g = cv.getContext("2d");
-  g.clearRect(0, 0, cv.width, cv.height);
-  const strokes = state.planned.map((s) => ({ rapid: s.rapid, pts: s.points.map(project) }));
-  const trail = state.trail.map(project);
-  let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
-  const grow = ([x, y]) => { x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y); };
-  strokes.forEach((s) => s.pts.forEach(grow));
-  trail.forEach(grow);
-  if (!(x0 <= x1)) { x0 = -1; x1 = 1; y0 = -1; y1 = 1; }
-  const pad = 30;
-  const scale = Math.min((cv.width - 2 * pad) / Math.max(x1 - x0, 1), (cv.height - 2 * pad) / Math.max(y1 - y0, 1));
-  const ox = pad + ((cv.width - 2 * pad) - (x1 - x0) * scale) / 2;
-  const oy = pad + ((cv.height - 2 * pad) - (y1 - y0) * scale) / 2;
-  const px = ([x, y]) => [ox + (x - x0) * scale, cv.height - (oy + (y - y0) * scale)];
-
-  drawScale(g, cv, scale);
-  g.lineWidth = 1.2;
-  for (const s of strokes) {
-    g.strokeStyle = s.rapid ? "#d9534f" : "#2b6cb0";
-    g.setLineDash(s.rapid ? [6, 4] : []);
-    g.beginPath();
-    s.pts.forEach((p, i) => { const [a, b] = px(p); if (i) g.lineTo(a, b); else g.moveTo(a, b); });
-    g.stroke();
-  }
-  g.setLineDash([]);
-  if (trail.length) {
-    g.strokeStyle = "#2e9d4a";
-    g.lineWidth = 3;
-    g.beginPath();
-    trail.forEach((p, i) => { const [a, b] = px(p); if (i) g.lineTo(a, b); else g.moveTo(a, b); });
-    g.stroke();
-    const [a, b] = px(trail[trail.length - 1]);
-    g.fillStyle = "#1f2d3d";
-    g.beginPath(); g.arc(a, b, 5, 0, 2 * Math.PI); g.fill();
-  }
-}
-
-/// A scale bar of a round length in the lower left corner.
-function drawScale(g, cv, scale) {
-  const target = 120 / scale;
-  const pow = Math.pow(10, Math.floor(Math.log10(target)));
-  const len = [1, 2, 5, 10].map((m) => m * pow).filter((l) => l <= target).pop() || pow;
-  const w = len * scale;
-  g.strokeStyle = "#333"; g.lineWidth = 2; g.setLineDash([]);
-  g.beginPath(); g.moveTo(12, cv.height - 14); g.lineTo(12 + w, cv.height - 14); g.stroke();
-  g.fillStyle = "#333"; g.font = "12px sans-serif";
-  g.fillText(len + " mm", 16 + w, cv.height - 10);
-  const names = { iso: "isometric", top: "X/Y", front: "X/Z" };
-  g.fillText(names[state.view], 12, 16);
-}
+// ---- drawing (the toolpath view is in view.js) ----------------------------------------
 
 function drawSpeedPlot() {
   const cv = $("speed-plot");
@@ -293,7 +361,21 @@ function drawSpeedPlot() {
   const m = await api("GET", "/api/machine");
   $("machine-name").textContent = m.name;
   $("machine-preset").textContent = "preset " + m.preset;
+  $("preset-line").textContent = "active preset: " + m.preset;
+  const tools = $("tools").querySelector("tbody");
+  tools.innerHTML = "";
+  for (const t of m.tools || []) {
+    const tr = document.createElement("tr");
+    for (const v of [t.number, t.name, t.length.toFixed(3), t.radius.toFixed(3)]) {
+      const td = document.createElement("td");
+      td.textContent = v;
+      tr.appendChild(td);
+    }
+    tools.appendChild(tr);
+  }
+  if (!(m.tools || []).length) tools.innerHTML = "<tr><td colspan=4>no tool table</td></tr>";
   buildDro(m.letters);
+  updateButtons();
   await loadProgramList();
   connect();
 })();
