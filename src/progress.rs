@@ -1,5 +1,7 @@
-//! The `klar run` progress bar: program line, percent of the program's lines and machine time,
-//! drawn on standard error only when it is a terminal.
+//! The `klar run` progress bar: percent of the program's machine time (the test run's planned
+//! time; percent of its lines only when there is none), program line and machine time, drawn
+//! on standard error only when it is a terminal. Machine time, not lines: one cycle call on a
+//! single line can take most of a program's time.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use klar::config::MachineConfig;
@@ -21,23 +23,23 @@ pub fn run_with_progress(
     stop: Option<OperatorStop>,
 ) -> Result<RunReport, Box<RunFailure>> {
     let show = !quiet && std::io::stderr().is_terminal();
+    let mut run = Run::start(program, config, options)?;
+    if let Some(stop) = stop {
+        run.watch_operator_stop(stop);
+    }
     let lines = if show { count_lines(program) } else { 0 };
+    let scale = Scale::new(run.planned_time(), lines);
     let bar = if show {
-        let bar = ProgressBar::with_draw_target(Some(lines), ProgressDrawTarget::stderr());
-        let style = ProgressStyle::with_template(
-            "{bar:32.cyan/blue} {percent:>3}%  line {pos}/{len}  {msg}  [{elapsed}]",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
+        let bar = ProgressBar::with_draw_target(Some(scale.len()), ProgressDrawTarget::stderr());
+        let style =
+            ProgressStyle::with_template("{bar:32.cyan/blue} {percent:>3}%  {msg}  [{elapsed}]")
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> ");
         bar.set_style(style);
         bar
     } else {
         ProgressBar::hidden()
     };
-    let mut run = Run::start(program, config, options)?;
-    if let Some(stop) = stop {
-        run.watch_operator_stop(stop);
-    }
     let mut last = Instant::now();
     let mut steps = 0u32;
     let ended = loop {
@@ -50,21 +52,65 @@ pub fn run_with_progress(
         if show && steps.is_multiple_of(64) && last.elapsed() >= REDRAW {
             last = Instant::now();
             let s = run.status();
-            bar.set_position(u64::from(s.line));
-            bar.set_message(format!("machine time {:.3} s", s.t));
+            bar.set_position(scale.position(s.t, s.line));
+            bar.set_message(scale.message(s.t, s.line, lines));
         }
     };
     if show {
         let s = run.status();
         bar.set_position(if ended.is_none() {
-            lines
+            scale.len()
         } else {
-            u64::from(s.line)
+            scale.position(s.t, s.line)
         });
-        bar.set_message(format!("machine time {:.3} s", s.t));
+        bar.set_message(scale.message(s.t, s.line, lines));
         bar.abandon();
     }
     run.finish(ended)
+}
+
+/// What the bar counts: milliseconds of the planned machine time, or lines without one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Scale {
+    /// The test run's planned machine time, s.
+    Time(f64),
+    /// The program's lines.
+    Lines(u64),
+}
+
+impl Scale {
+    fn new(planned: Option<f64>, lines: u64) -> Self {
+        match planned {
+            Some(t) if t.is_finite() && t > 0.0 => Scale::Time(t),
+            _ => Scale::Lines(lines),
+        }
+    }
+
+    /// The bar's length.
+    fn len(self) -> u64 {
+        match self {
+            Scale::Time(t) => (t * 1000.0).round().max(1.0) as u64,
+            Scale::Lines(n) => n,
+        }
+    }
+
+    /// The bar's position at machine time `t` on program line `line`; below the end until
+    /// the run has ended (a run slower than planned, under a feed override, waits at 99 %).
+    fn position(self, t: f64, line: u32) -> u64 {
+        match self {
+            Scale::Time(_) => ((t * 1000.0).max(0.0) as u64).min(self.len().saturating_sub(1)),
+            Scale::Lines(_) => u64::from(line),
+        }
+    }
+
+    fn message(self, t: f64, line: u32, lines: u64) -> String {
+        match self {
+            Scale::Time(total) => {
+                format!("machine time {t:.3} of {total:.3} s  line {line}/{lines}")
+            }
+            Scale::Lines(_) => format!("line {line}/{lines}  machine time {t:.3} s"),
+        }
+    }
 }
 
 /// Lines of the program file (for the percentage); 0 when it cannot be read.
@@ -88,5 +134,24 @@ fn count_lines(program: &Path) -> u64 {
             }
         };
         r.consume(n);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_bar_counts_machine_time_when_it_is_known() {
+        // One long cycle on line 5 of 9 that takes 40 of 50 s: the bar follows the time.
+        let s = Scale::new(Some(50.0), 9);
+        assert_eq!(s.len(), 50_000);
+        assert_eq!(s.position(30.0, 5), 30_000);
+        // A run slower than planned does not reach the end before it ends.
+        assert_eq!(s.position(60.0, 9), 49_999);
+        // Without a planned time (no test run), lines.
+        let s = Scale::new(None, 9);
+        assert_eq!((s.len(), s.position(30.0, 5)), (9, 5));
+        assert_eq!(Scale::new(Some(0.0), 9), Scale::Lines(9));
     }
 }

@@ -92,6 +92,9 @@ pub struct RunReport {
     pub spindle_warning: Option<String>,
     /// Where each axis stood when the run started.
     pub start: Vec<AxisStart>,
+    /// The test run's planned machine time, s, when the test run ran before the start and
+    /// went through the whole program: what progress displays count against.
+    pub planned_time: Option<f64>,
 }
 
 /// Where an axis stood when a run started: read from its drive when the drive measures its
@@ -456,6 +459,9 @@ impl<'a, 'w> Run<'a, 'w> {
             if !checked.passed() {
                 return Err(fail(RunError::Syntax(checked.errors), &report));
             }
+            if checked.gave_up.is_none() {
+                report.planned_time = Some(checked.planned_time);
+            }
         }
         report.start = io.standing(config);
         for (s, a) in report.start.iter().zip(&config.axes) {
@@ -679,6 +685,12 @@ impl<'a, 'w> Run<'a, 'w> {
     /// Where each axis stood when the run started, and whether it is referenced.
     pub fn start_positions(&self) -> &[AxisStart] {
         &self.report.start
+    }
+
+    /// The test run's planned machine time of the whole program, s (see
+    /// [`RunReport::planned_time`]).
+    pub fn planned_time(&self) -> Option<f64> {
+        self.report.planned_time
     }
 
     /// The machine axis letters, in trace order.

@@ -581,3 +581,40 @@ fn the_program_view_has_the_blank_the_block_ends_and_the_machine_time() {
         serde_json::json!([[-5.0, 0.0, -20.0], [100.0, 60.0, 0.0]])
     );
 }
+
+#[test]
+fn a_lathe_takes_lathe_din_mdi_and_refuses_milling_programs() {
+    let dir = programs_dir("lathe");
+    let (_rt, addr) = start(ServeOptions {
+        machine: MachineConfig::builtin_lathe(),
+        ..options(&dir, None)
+    });
+    let (_, info) = request(addr, "GET", "/api/machine", "", "");
+    assert_eq!(json(&info)["lathe"], true);
+    // one.h is Klartext: refused at load, with the reason.
+    let (code, v) = post(addr, "/api/load", r#"{"name": "one.h"}"#);
+    assert_eq!(code, 422);
+    assert!(v["error"].as_str().unwrap().contains("lathe"), "{v}");
+    // An MDI block of lathe DIN: X is programmed as a diameter, the X axis moves the radius.
+    let (code, v) = post(addr, "/api/mdi", r#"{"block": "G0 X40 Z5"}"#);
+    assert_eq!(code, 204, "{v}");
+    let s = wait_for(addr, "the MDI block's end", &|s| {
+        at_rest(s) && s["manual"] == "MDI G0 X40 Z5"
+    });
+    let letters: Vec<&str> = s["letters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    let at = |l: &str| s["commanded"][letters.iter().position(|&x| x == l).unwrap()].clone();
+    assert_eq!((at("X"), at("Z")), (20.0.into(), 5.0.into()), "{s}");
+    // Jogging a lathe is not offered yet: said, not done.
+    let (code, v) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "Z", "distance": 1, "speed": 5}"#,
+    );
+    assert_eq!(code, 422);
+    assert!(v["error"].as_str().unwrap().contains("MDI"), "{v}");
+}

@@ -250,7 +250,10 @@ impl MachineLoop {
                         last_publish = Instant::now();
                     }
                 }
-                Err(RecvTimeoutError::Disconnected) => return,
+                Err(RecvTimeoutError::Disconnected) => {
+                    let _ = std::fs::remove_dir_all(&self.scratch);
+                    return;
+                }
             }
         }
         let _ = std::fs::remove_dir_all(&self.scratch);

@@ -302,6 +302,19 @@ pub(super) async fn scenario() {
     drop::<Guard>(server);
     wait_state(&c, "no connection to the server").await;
     expect_enabled(&c, "offline", &[]).await;
+    for id in [
+        "override",
+        "single-block",
+        "jog-minus",
+        "home-all",
+        "upload",
+    ] {
+        let e = c.find(Locator::Id(id)).await.expect(id);
+        assert!(
+            !e.is_enabled().await.expect(id),
+            "#{id} enabled without a server"
+        );
+    }
     c.set_window_size(1280, 900).await.expect("window size");
     shot(&c, "dashboard-offline-1280.png").await;
     c.close().await.expect("browser closes");

@@ -293,6 +293,9 @@ function updateButtons() {
   if (on && st === "running" && s.manual && s.manual.startsWith("jog") && !/\d/.test(s.manual)) {
     enable["jog-cont-minus"] = enable["jog-cont-plus"] = true;
   }
+  // Override and single block act in every state, but only with the server there.
+  enable.override = !!on;
+  enable["single-block"] = !!on;
   for (const [id, ok] of Object.entries(enable)) $(id).disabled = !ok;
   document.body.classList.toggle("offline", !state.online);
 }
