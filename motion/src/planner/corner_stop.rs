@@ -17,8 +17,10 @@ use crate::limits::Headroom;
 use crate::profile::Ramp;
 
 /// Smallest turn (radians, 45°) at which a blend is weighed against an exact stop by the
-/// time each loses ([`stop_saves_time`]). Gentler corners are crossed fast enough inside
-/// the band that a stop never pays.
+/// time each loses ([`stop_saves_time`]). A gentler corner's blend reaches further into its
+/// neighbours for the same band and bends less, so it keeps much more of their speed; such
+/// corners are not weighed (nor are blends through dense code, whose split points are
+/// estimates).
 pub(super) const SHARP_TURN: f64 = std::f64::consts::FRAC_PI_4;
 
 /// One part of a blend as it will be committed: its stretch `[from, to]` along the blend
@@ -47,8 +49,8 @@ fn ramp_loss(from: f64, to: f64, cruise: f64, accel: f64, jerk: f64) -> f64 {
 /// Inside a tight band the blend of a sharp corner is short and strongly curved: the jerk
 /// its curvature causes, v³·dκ/ds, holds it to a crawl (a 90° corner in a 0.01 mm band on
 /// axes with 1e5 mm/s³ allows about 1.3 mm/s), and crossing it takes longer than coming to
-/// rest at the corner and speeding up again on the new direction, which an axis may do
-/// within its own limits at any speed. The estimate compares the time each way loses
+/// rest at the corner and speeding up again in the new direction, each a jerk-limited ramp
+/// along a straight element. The estimate compares the time each way loses
 /// against running at the neighbours' own speeds `vl` (the top speed of `cur`, at most its
 /// feed) and `vr`:
 /// * through the blend: braking from `vl` to the slowest part's speed `low` (with `cur`'s
@@ -98,8 +100,8 @@ pub(super) fn stop_saves_time<'a>(
 }
 
 /// Share of its neighbours' speed or acceleration limit below which the blend of a sharp
-/// corner (turning more than [`SPLIT_MAX_ANGLE`](super::path::SPLIT_MAX_ANGLE)) is not worth it: the path stops exactly
-/// at the corner instead.
+/// corner (turning more than [`SPLIT_MAX_ANGLE`](super::path::SPLIT_MAX_ANGLE)) is not worth
+/// it: the path stops exactly at the corner instead.
 const SLOW_BLEND: f64 = 0.1;
 
 /// True when a blend's limits fall so far below those of the elements it joins that an

@@ -16,6 +16,9 @@
 //!   whose jerk is effectively unlimited); otherwise a blend as at any corner;
 //! * tolerance 0, rotary-only moves, a turn sharper than 120°, or no blend found: exact
 //!   stop at the corner;
+//! * a turn of 45° or more outside dense code whose blend, crossed at the speed its
+//!   curvature allows, is estimated to lose more time than braking to rest at the corner
+//!   and speeding up again: exact stop (`corner_stop.rs`);
 //! * next to an element that turns a rotary axis along its linear motion (whose turn per
 //!   millimetre can put the blend's limits far below its neighbours'): exact stop where
 //!   that is estimated to take less time than slowing into the blend and out of it and the
