@@ -384,16 +384,18 @@ impl VfdWorker {
                 }
             }
             Err(e) => {
-                if self.comm_fault.is_none() {
-                    error!(
-                        unit = self.link.unit(),
-                        "VFD communication lost, stopping spindle: {e}"
-                    );
-                }
                 self.exception = match &e {
                     ModbusError::Exception { code, .. } => Some(*code),
                     _ => None,
                 };
+                if self.comm_fault.is_none() {
+                    let what = if self.exception.is_some() {
+                        "VFD refused a request"
+                    } else {
+                        "VFD communication lost"
+                    };
+                    error!(unit = self.link.unit(), "{what}, stopping spindle: {e}");
+                }
                 self.comm_fault = Some(e.to_string());
                 // Force a new stop write once the link is back.
                 self.written = None;

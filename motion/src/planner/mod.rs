@@ -35,6 +35,8 @@ mod run;
 mod scan;
 pub mod smooth;
 pub mod speed;
+#[cfg(test)]
+mod starved_tests;
 pub mod tcpm;
 #[cfg(test)]
 mod test_machine;
