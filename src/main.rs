@@ -548,6 +548,7 @@ fn cmd_run(
         }
         if report.realtime {
             say!("underruns:    {}", report.underruns);
+            say!("starved:      {} cycles", report.starved);
             if let Some(l) = &report.lateness {
                 say!("lateness:     {l}");
             }

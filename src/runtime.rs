@@ -30,6 +30,7 @@ mod error;
 mod events;
 pub mod guard;
 mod operator;
+mod reader;
 mod settle;
 mod spindle;
 mod stop;
@@ -40,13 +41,14 @@ use crate::config::MachineConfig;
 use crate::latency::Pacer;
 use crate::machine::{MachineError, MachineIo};
 use crate::monitor::{StopCause, StopReport};
-use crate::testrun::{check_positioning, check_travel, planner_ops, positioning_axes};
+use crate::testrun::positioning_axes;
 use crate::trace::{SpindleRow, TraceWriter};
 use command::CommandPath;
 pub use error::RunError;
-use klar_interp::{AxisLetter, Op, SourceLoc};
+use klar_interp::{AxisLetter, SourceLoc};
 use klar_motion::{AxisFault, Planner, Sample, Step};
 pub use operator::{OperatorStop, StopLevel};
+use reader::{Feed, OpChecks, Reader};
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
@@ -80,6 +82,9 @@ pub struct RunReport {
     pub underruns: u64,
     /// Wake-up lateness of the servo cycles on the wall clock (realtime runs).
     pub lateness: Option<crate::latency::LatenessSummary>,
+    /// Servo cycles in which the planner wanted ops the program reader had not yet
+    /// delivered (realtime runs): the path then brakes for the end of what it has.
+    pub starved: u64,
     /// Seconds spent waiting for the spindle to reach speed (on the wall clock in realtime
     /// runs).
     pub spindle_wait: f64,
@@ -143,14 +148,14 @@ pub struct Run<'a, 'w> {
     path: &'a Path,
     config: &'a MachineConfig,
     letters: Vec<AxisLetter>,
-    travel: Vec<[f64; 2]>,
     /// Samples → kinematics → guarded setpoints (shared with the test run).
     command: CommandPath,
     io: MachineIo,
-    ops: OpStream,
+    /// The program reader thread's queue of ops.
+    reader: Reader,
+    /// Blocks the interpreter had executed when it read the last op taken.
+    blocks: u64,
     planner: Planner,
-    /// Ops read from the interpreter waiting for room in the planner.
-    queue: VecDeque<Op>,
     /// The interpreter has nothing more to give (end, or an error).
     input_done: bool,
     /// An error found while reading ahead, reported once the motion before it is done.
@@ -488,6 +493,12 @@ impl<'a, 'w> Run<'a, 'w> {
             .map_err(|d| fail(RunError::Program(d), &report))?;
         let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
         let ops = OpStream::new(interp, start, max_rpm, path);
+        let checks = OpChecks {
+            letters: letters.clone(),
+            travel: config.axes.iter().map(|a| a.travel).collect(),
+            positioning: positioning_axes(config),
+            path: path.to_path_buf(),
+        };
         let planner = config
             .planner(start)
             .map_err(|e| fail(RunError::Motion(e), &report))?;
@@ -525,15 +536,24 @@ impl<'a, 'w> Run<'a, 'w> {
             }
         }
         let lags = io.feedback_lags();
-        Ok(Run {
+        let reader = match Reader::spawn(ops, checks) {
+            Ok(r) => r,
+            Err(e) => {
+                if let Err(e) = io.disable() {
+                    tracing::warn!("disabling after a refused start: {e}");
+                }
+                let (what, message) = ("program reader thread".into(), e.to_string());
+                return Err(fail(MachineError::Open { what, message }.into(), &report));
+            }
+        };
+        let mut run = Run {
             path,
             config,
-            travel: config.axes.iter().map(|a| a.travel).collect(),
             command,
             io,
-            ops,
+            reader,
+            blocks: 0,
             planner,
-            queue: VecDeque::new(),
             input_done: false,
             pending_error: None,
             stop_requested: false,
@@ -584,7 +604,11 @@ impl<'a, 'w> Run<'a, 'w> {
             letters,
             operator: None,
             operator_seen: StopLevel::None,
-        })
+        };
+        // Start-up: the planner fills its look-ahead before the first cycle, waiting for
+        // the reader as long as it takes.
+        run.feed_planner(true);
+        Ok(run)
     }
 
     /// Advances the run by one planner step (a servo cycle or an event). Returns false once
@@ -593,7 +617,8 @@ impl<'a, 'w> Run<'a, 'w> {
         if self.stop_report.is_some() {
             return Err(RunError::Stopped { line: self.line });
         }
-        self.feed_planner();
+        let wait = !self.report.realtime;
+        let mut fed = self.feed_planner(wait);
         if self.planner.path_speed() == 0.0
             && let Some(pending) = self.stopping.take()
         {
@@ -604,7 +629,14 @@ impl<'a, 'w> Run<'a, 'w> {
             // The step freed a place in a full planner (a stop reached): it wants more input
             // before it goes on, which is not the end of the program. Each round takes an op
             // or ends the input.
-            self.feed_planner();
+            if !fed {
+                // Starved: the reader has not kept up. The path goes on with what it has,
+                // braking for its end (the planner always can), and the cycle is counted.
+                self.report.starved += 1;
+                next = self.planner.next_step_starved();
+                break;
+            }
+            fed = self.feed_planner(wait);
             next = self.planner.next_step();
         }
         let result = match next {
@@ -614,8 +646,15 @@ impl<'a, 'w> Run<'a, 'w> {
                 .map(|()| false),
             Some(Step::Sample(sample)) => self.apply_sample(&sample).map(|()| true),
             // While stopping, events (spindle, stops) of blocks not reached are not executed.
-            Some(Step::Event(_)) if self.stopping.is_some() => Ok(true),
-            Some(Step::Event(op)) => self.handle_event(&op).map(|()| true),
+            Some(Step::Event(op)) if self.stopping.is_some() => {
+                self.reader.give_back(op);
+                Ok(true)
+            }
+            Some(Step::Event(op)) => {
+                let handled = self.handle_event(&op).map(|()| true);
+                self.reader.give_back(op);
+                handled
+            }
         };
         match result {
             Err(
@@ -678,7 +717,7 @@ impl<'a, 'w> Run<'a, 'w> {
             feed_override: self.planner.feed_override(),
             path_speed: self.planner.path_speed(),
             spindle_rpm,
-            blocks: self.ops.blocks_executed(),
+            blocks: self.blocks,
         }
     }
 
@@ -702,7 +741,14 @@ impl<'a, 'w> Run<'a, 'w> {
     /// `error` is the error that ended the run early, if any; an error found while reading
     /// ahead (reported after the motion before it finished) comes out here too.
     pub fn finish(mut self, error: Option<RunError>) -> Result<RunReport, Box<RunFailure>> {
-        self.report.blocks = self.ops.blocks_executed();
+        self.report.blocks = self.blocks;
+        if self.report.starved > 0 {
+            tracing::warn!(
+                "the program reader fell behind in {} servo cycles: the path braked for the end \
+                 of the ops it had",
+                self.report.starved
+            );
+        }
         let disabled = self.io.disable();
         self.report.spindle_warning = self.io.spindle_mut().and_then(|s| s.stop_warning());
         if self.report.realtime {
@@ -727,36 +773,30 @@ impl<'a, 'w> Run<'a, 'w> {
         Ok(report)
     }
 
-    /// Moves ops from the interpreter into the planner while it wants more.
-    fn feed_planner(&mut self) {
+    /// Moves ops from the reader into the planner while it wants more, waiting for them
+    /// when `wait`. Returns false when the planner wants more and the reader has none yet.
+    fn feed_planner(&mut self, wait: bool) -> bool {
         while !self.input_done && self.planner.needs_input() {
-            if let Some(op) = self.queue.pop_front() {
-                if let Err(e) = self.planner.push(op) {
-                    self.stop_reading(RunError::Motion(e));
+            match self.reader.next(wait) {
+                None => return false,
+                Some(Feed::Op(op, blocks)) => {
+                    self.blocks = blocks;
+                    if let Err(e) = self.planner.push(op) {
+                        self.stop_reading(RunError::Motion(e));
+                    }
                 }
-                continue;
-            }
-            let next = match self.ops.next() {
-                Some(Ok(op)) => check_travel(&op, &self.letters, &self.travel, self.path)
-                    .and_then(|()| {
-                        check_positioning(&op, &self.letters, &self.positioning, self.path)
-                    })
-                    .map_err(RunError::Program)
-                    .map(|()| {
-                        let ops = planner_ops(op, &self.letters, &self.positioning);
-                        self.queue.extend(ops);
-                    }),
-                Some(Err(e)) => Err(e),
-                None => {
+                Some(Feed::Error(e, blocks)) => {
+                    self.blocks = self.blocks.max(blocks);
+                    self.stop_reading(e);
+                }
+                Some(Feed::End(blocks)) => {
+                    self.blocks = blocks;
                     self.planner.finish();
                     self.input_done = true;
-                    Ok(())
                 }
-            };
-            if let Err(e) = next {
-                self.stop_reading(e);
             }
         }
+        true
     }
 
     /// An error found while reading ahead: the motion of the blocks before it finishes, then

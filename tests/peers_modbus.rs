@@ -82,8 +82,13 @@ fn a_vfd_exception_ends_in_a_controlled_stop_with_the_spindle_stopped() {
     assert!(!run.status.success(), "{run:?}");
     let device = format!("spindle VFD (Modbus unit 1 on {})", peer.port);
     assert!(
-        run.stderr.contains(&device) && run.stderr.contains("exception 0x04"),
-        "the stop names the device and the exception: {}",
+        run.stderr.contains(&device) && run.stderr.contains("device exception 0x04"),
+        "the stop names the device and the exception as its own fault kind: {}",
+        run.stderr
+    );
+    assert!(
+        !run.stderr.contains("communication lost"),
+        "a device that answers with an exception is not a lost link: {}",
         run.stderr
     );
     assert!(!run.stderr.contains("may still turn"), "{}", run.stderr);

@@ -53,6 +53,15 @@ pub enum AxisFault {
     EStop,
     /// Communication with the drive was lost.
     CommunicationLost,
+    /// The device answered a request with an exception: it is there and talking, but
+    /// refused what it was asked (a Modbus exception response, e.g. 02 illegal data
+    /// address or 04 server device failure).
+    DeviceException {
+        /// The exception code the device sent.
+        code: u8,
+        /// What the code means, as the protocol defines it.
+        meaning: &'static str,
+    },
 }
 
 impl fmt::Display for AxisFault {
@@ -64,6 +73,9 @@ impl fmt::Display for AxisFault {
             AxisFault::Drive { code, text } => write!(f, "drive fault 0x{code:04X}: {text}"),
             AxisFault::EStop => write!(f, "emergency stop"),
             AxisFault::CommunicationLost => write!(f, "communication lost"),
+            AxisFault::DeviceException { code, meaning } => {
+                write!(f, "device exception 0x{code:02X} ({meaning})")
+            }
         }
     }
 }

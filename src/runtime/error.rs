@@ -8,6 +8,10 @@ use crate::machine::MachineError;
 /// Why a run did not complete.
 #[derive(Debug, thiserror::Error)]
 pub enum RunError {
+    /// The program reader thread ended without a word (it panicked): the run stops on
+    /// the path where the ops read so far end.
+    #[error("the program reader stopped unexpectedly")]
+    ReaderLost,
     /// Errors found before motion (syntax, or anything the test run refuses): nothing moved.
     #[error("the program has {} error(s); nothing moved{}", .0.len(), first_of(.0))]
     Syntax(Vec<Diagnostic>),

@@ -1,8 +1,9 @@
 //! A spindle VFD on Modbus RTU behind [`SpindleBackend`].
 //!
 //! Fault handling: when the link gives up (all retries used) the spindle reports
-//! [`AxisFault::CommunicationLost`] and the worker keeps trying to write a stop. The fault
-//! clears once the runtime commands 0 rpm and the VFD answers again. A VFD fault is
+//! [`AxisFault::CommunicationLost`] and the worker keeps trying to write a stop; an exception
+//! the VFD answers (it is there, but refuses the request) is reported as
+//! [`AxisFault::DeviceException`] with its code and meaning instead. The fault clears once the runtime commands 0 rpm and the VFD answers again. A VFD fault is
 //! reported as [`AxisFault::Drive`] with the VFD's code; it is cleared with
 //! [`ModbusVfd::reset_fault`].
 //!
@@ -101,6 +102,7 @@ impl ModbusVfd {
                 written: None,
                 status: None,
                 comm_fault: None,
+                exception: None,
                 vfd_fault: None,
                 device: worker_device,
                 poll,
@@ -239,6 +241,8 @@ struct VfdWorker {
     written: Option<f64>,
     status: Option<VfdStatus>,
     comm_fault: Option<String>,
+    /// The exception code when the failure behind `comm_fault` was an exception answer.
+    exception: Option<u8>,
     vfd_fault: Option<u16>,
     device: String,
     poll: Duration,
@@ -361,6 +365,7 @@ impl VfdWorker {
             self.link.write_single(address, value).await?;
         }
         self.comm_fault = None;
+        self.exception = None;
         self.vfd_fault = None;
         info!(unit = self.link.unit(), "VFD fault reset");
         Ok(())
@@ -377,14 +382,21 @@ impl VfdWorker {
                         "VFD answers again; spindle stopped"
                     );
                     self.comm_fault = None;
+                    self.exception = None;
                 }
             }
             Err(e) => {
+                self.exception = match &e {
+                    ModbusError::Exception { code, .. } => Some(*code),
+                    _ => None,
+                };
                 if self.comm_fault.is_none() {
-                    error!(
-                        unit = self.link.unit(),
-                        "VFD communication lost, stopping spindle: {e}"
-                    );
+                    let what = if self.exception.is_some() {
+                        "VFD refused a request"
+                    } else {
+                        "VFD communication lost"
+                    };
+                    error!(unit = self.link.unit(), "{what}, stopping spindle: {e}");
                 }
                 self.comm_fault = Some(e.to_string());
                 // Force a new stop write once the link is back.
@@ -429,7 +441,13 @@ impl VfdWorker {
             self.written
         };
         snap.fault = if self.comm_fault.is_some() {
-            Some(AxisFault::CommunicationLost)
+            Some(match self.exception {
+                Some(code) => AxisFault::DeviceException {
+                    code,
+                    meaning: super::exception_name(code),
+                },
+                None => AxisFault::CommunicationLost,
+            })
         } else {
             self.vfd_fault.map(|code| AxisFault::Drive {
                 code: u32::from(code),

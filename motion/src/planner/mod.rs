@@ -36,6 +36,8 @@ mod run;
 mod scan;
 pub mod smooth;
 pub mod speed;
+#[cfg(test)]
+mod starved_tests;
 pub mod tcpm;
 #[cfg(test)]
 mod test_machine;
@@ -157,6 +159,8 @@ pub struct Planner {
     stash: Option<Sample>,
     hold_until: Option<(f64, SourceLoc)>,
     window: Window,
+    /// The speed step's buffers, reused every period.
+    scratch: speed::Scratch,
     /// Distance ahead the last scan looked at.
     range: f64,
     factor: f64,
@@ -220,6 +224,7 @@ impl Planner {
             reached: 0.0,
             stash: None,
             hold_until: None,
+            scratch: speed::Scratch::default(),
             window: Window {
                 period,
                 ..Window::default()
@@ -577,6 +582,19 @@ impl Planner {
     /// The next sample or event; `None` once finished and drained (or, before
     /// [`Planner::finish`], when it needs input first).
     pub fn next_step(&mut self) -> Option<Step> {
+        self.step(false)
+    }
+
+    /// The next sample or event when the caller has no input to give though the planner
+    /// wants some (its source has fallen behind): the path goes on with what is committed.
+    /// That is safe because the speed profile always brakes for the end of the committed
+    /// path (it counts as a stop, see `next_stop`): a starved path slows down and comes to
+    /// rest there, and holds until input arrives. `None` once finished and drained.
+    pub fn next_step_starved(&mut self) -> Option<Step> {
+        self.step(true)
+    }
+
+    fn step(&mut self, starved: bool) -> Option<Step> {
         loop {
             match self.markers.front() {
                 Some(Marker::Event { at, .. }) if *at <= self.reached + STOP_SNAP => {
@@ -642,7 +660,7 @@ impl Planner {
                 }
                 self.hold_until = None;
             }
-            if !self.finished && self.needs_input() {
+            if !self.finished && !starved && self.needs_input() {
                 return None;
             }
             if self.finished
@@ -731,7 +749,13 @@ impl Planner {
         self.scan();
         let target = self.go_target();
         let before = self.state;
-        let mut next = speed::advance(&self.state, target, &self.window, self.config.period);
+        let mut next = speed::advance_with(
+            &self.state,
+            target,
+            &self.window,
+            self.config.period,
+            &mut self.scratch,
+        );
         // Never past the end of the committed path or the next stop.
         let stop = self.next_stop();
         if next.s > stop {

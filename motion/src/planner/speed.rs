@@ -546,11 +546,27 @@ pub fn check(x: &Motion, w: &Window) -> bool {
 /// A ramp towards a speed: (target, acceleration limit, jerk limit).
 type Action = (f64, f64, f64);
 
+/// Buffers [`advance_with`] works in, kept by its caller from one period to the next so
+/// that a period's step allocates nothing once they have grown to the window's needs.
+#[derive(Debug, Clone, Default)]
+pub struct Scratch {
+    /// Ramps found with their urgency, while sorting.
+    found: Vec<(Action, f64)>,
+    /// Candidate ramps, in the order they are tried.
+    candidates: Vec<Action>,
+}
+
 /// The ramps from state `from` for the limits that `x` misses (`from` itself, or where the
 /// plain action from it would lead), the worst first (the largest ratio of distance needed
 /// to distance left); empty when it misses none.
-fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
-    let mut found: Vec<(Action, f64)> = Vec::new();
+fn bindings(
+    from: &Motion,
+    x: &Motion,
+    w: &Window,
+    found: &mut Vec<(Action, f64)>,
+    out: &mut Vec<Action>,
+) {
+    found.clear();
     for (k, limit, too_fast, too_hard) in relevant(x, w) {
         let l = &limit;
         let urgency = if too_fast > 0.0 { too_fast } else { too_hard };
@@ -597,8 +613,16 @@ fn bindings(from: &Motion, x: &Motion, w: &Window) -> Vec<Action> {
             }
         }
     }
-    found.sort_by(|a, b| b.1.total_cmp(&a.1));
-    found.into_iter().map(|f| f.0).collect()
+    // Worst first; ties keep the order found (a stable insertion sort: the list is short,
+    // and std's stable sort would allocate).
+    for i in 1..found.len() {
+        let mut j = i;
+        while j > 0 && found[j - 1].1.total_cmp(&found[j].1).is_lt() {
+            found.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+    out.extend(found.iter().map(|f| f.0));
 }
 
 /// State after following the ramp to `target` for `dt`.
@@ -696,6 +720,12 @@ fn reachable_speed(x: &Motion, jerk: f64, dt: f64) -> f64 {
 
 /// The state one period `dt` on, heading for `target` speed.
 pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
+    advance_with(x, target, w, dt, &mut Scratch::default())
+}
+
+/// [`advance`] working in the caller's `scratch` buffers (no allocation once they have
+/// grown).
+pub fn advance_with(x: &Motion, target: f64, w: &Window, dt: f64, scratch: &mut Scratch) -> Motion {
     let go = go_step(x, target, w, dt);
     if check(&go, w) {
         return go;
@@ -704,9 +734,11 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     // towards those the go ramp would miss, then a stop. The first whose result is safe
     // bounds a bisection for the highest safe speed between it and the go target: the
     // ramp rides the braking curve in front of the binding limit.
-    let mut candidates = bindings(x, x, w);
-    candidates.extend(bindings(x, &go, w));
-    for c in &mut candidates {
+    let Scratch { found, candidates } = scratch;
+    candidates.clear();
+    bindings(x, x, w, found, candidates);
+    bindings(x, &go, w, found, candidates);
+    for c in candidates.iter_mut() {
         c.0 = c.0.min(target);
     }
     if x.a < 0.0 {
@@ -731,7 +763,7 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
     }
     candidates.push((0.0, w.grip.at(peak_speed(x, w.jerk)), w.jerk));
     let mut fallback: Option<(Motion, bool)> = None;
-    for &(low, accel, jerk) in &candidates {
+    for &(low, accel, jerk) in candidates.iter() {
         let low = low.max(0.0);
         let brake = ramp_step(x, low, accel, jerk, dt);
         if !check(&brake, w) {

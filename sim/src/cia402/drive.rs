@@ -493,6 +493,7 @@ impl SimCia402Drive {
                 AxisFault::LimitSwitch { .. } => EMCY_LIMIT_SWITCH,
                 AxisFault::EStop => EMCY_ESTOP,
                 AxisFault::CommunicationLost => 0x8130,
+                AxisFault::DeviceException { .. } => 0x8100,
                 AxisFault::Drive { code, .. } => u16::try_from(code).unwrap_or(0xFF00),
             };
             self.enter_fault(code, out);

@@ -44,6 +44,7 @@ pub fn fault_code(fault: &AxisFault) -> u16 {
         AxisFault::Drive { code, .. } => u16::try_from(*code).unwrap_or(0xFFFF),
         AxisFault::EStop => 0x0301,
         AxisFault::CommunicationLost => 0x0401,
+        AxisFault::DeviceException { .. } => 0x0402,
     }
 }
 
