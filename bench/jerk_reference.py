@@ -80,7 +80,8 @@ def klar_trace(klar, program, machine):
         with open(trace) as f:
             rows = list(csv.reader(f))
     header = rows[0]
-    letters = [h for h in header[1:] if not h.endswith("_act")]
+    # axis columns only: not the measured ones, nor the spindle's S and S_deg
+    letters = [h for h in header[1:] if not h.endswith("_act") and h not in ("S", "S_deg")]
     cols = [header.index(l) for l in letters]
     pos = np.array([[float(r[c]) for c in cols] for r in rows[1:]])
     ktime = None

@@ -163,6 +163,8 @@ impl Strokes {
 fn flatten(op: &Op) -> Option<(bool, Vec<[f64; 3]>)> {
     match &op.kind {
         OpKind::Line { from, to, feed } => Some((*feed == Feed::Rapid, vec![xyz(from), xyz(to)])),
+        // A thread pass is a feed move along its line.
+        OpKind::SpindleSync { from, to, .. } => Some((false, vec![xyz(from), xyz(to)])),
         OpKind::Arc {
             from,
             to,

@@ -208,6 +208,8 @@ pub struct Run<'a, 'w> {
     operator: Option<OperatorStop>,
     /// The operator's stop level the run has acted on.
     operator_seen: StopLevel,
+    /// A pass geared to the spindle under way (a thread pass).
+    sync: Option<sync::SyncPass>,
 }
 
 impl Run<'_, '_> {
@@ -604,6 +606,7 @@ impl<'a, 'w> Run<'a, 'w> {
             letters,
             operator: None,
             operator_seen: StopLevel::None,
+            sync: None,
         };
         // Start-up: the planner fills its look-ahead before the first cycle, waiting for
         // the reader as long as it takes.
@@ -616,6 +619,16 @@ impl<'a, 'w> Run<'a, 'w> {
     pub fn step(&mut self) -> Result<bool, RunError> {
         if self.stop_report.is_some() {
             return Err(RunError::Stopped { line: self.line });
+        }
+        if self.sync.is_some() {
+            // Inside a geared pass neither hold nor stop acts: the pass runs to its end.
+            return match self.sync_step() {
+                Ok(()) => Ok(true),
+                Err(
+                    e @ (RunError::Fault { .. } | RunError::Backend(_) | RunError::Setpoint { .. }),
+                ) => Err(self.quick_stop(e)),
+                Err(e) => Err(e),
+            };
         }
         let wait = !self.report.realtime;
         let mut fed = self.feed_planner(wait);

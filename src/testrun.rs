@@ -81,6 +81,9 @@ pub struct TestRunReport {
     pub undecided: Vec<String>,
     /// Motion ops checked against the machine.
     pub motion_ops: u64,
+    /// Moves geared to the spindle (thread passes) among them: their setpoints follow the
+    /// measured spindle angle, so their jerk is the spindle's, not the planner's.
+    pub geared_ops: u64,
     /// Planned machine time of the checked part of the program, s.
     pub planned_time: f64,
     /// Lowest and highest position per machine axis over the checked moves.
@@ -372,7 +375,12 @@ impl<'a> MachineChecks<'a> {
                 self.spindle(op.loc, *dir, *speed, report);
             }
             OpKind::Spindle { dir, speed, .. } => self.spindle(op.loc, *dir, *speed, report),
-            OpKind::SpindleSync { .. } => self.spindle_sync(&op, report),
+            OpKind::SpindleSync { .. } => {
+                report.motion_ops += 1;
+                report.geared_ops += 1;
+                self.widen(&op, report);
+                self.spindle_sync(&op, report);
+            }
             OpKind::RadiusComp { side } if *side != klar_interp::CompSide::Off => {
                 if let Some((tool, radius)) = self.tool
                     && tool != 0

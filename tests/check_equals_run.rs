@@ -9,7 +9,7 @@
 
 mod common;
 
-use common::{assert_within_limits, max_derivative, run, temp_program};
+use common::{assert_within, max_derivative, run, temp_program};
 use klar::config::MachineConfig;
 use klar::runtime::RunError;
 use klar::runtime::guard::{ACCELERATION_MARGIN, VELOCITY_MARGIN};
@@ -165,7 +165,12 @@ fn check_then_run(path: &Path, machine: &MachineConfig, tally: &mut Tally) {
     if undecided {
         tally.undecided += 1;
     }
-    assert_within_limits(&trace, &config);
+    // A thread pass follows the measured spindle angle: each setpoint is pitch × an encoder
+    // reading, so its third difference is the encoder's quantisation (0.37 µm of Z per count
+    // at 1.5 mm pitch, i.e. up to ~1.5e6 mm/s³ at 1 ms) and the spindle's speed ripple, not a
+    // planner's jerk. Velocity and acceleration, which the setpoint guard bounds, are still
+    // checked; the jerk is checked on programs without such passes.
+    assert_within(&trace, &config, report.geared_ops == 0);
     let (v, a) = margin_use(&trace, &config);
     tally.velocity_use = tally.velocity_use.max(v);
     tally.acceleration_use = tally.acceleration_use.max(a);

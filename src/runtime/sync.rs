@@ -231,9 +231,26 @@ impl SyncProfile {
     }
 }
 
+/// A geared pass under way: one servo cycle of it per [`Run::step`].
+pub(super) struct SyncPass {
+    profile: SyncProfile,
+    /// Direction of rotation: 1 (M3) or -1 (M4).
+    dir: f64,
+    /// The trigger, as an angle in the direction of rotation, degrees.
+    trigger: f64,
+    /// Machine time the wait for the trigger began.
+    waited_from: f64,
+    /// The tool is past the run-in (the spindle carries the cut's load).
+    cutting: bool,
+    /// The spindle in words, and how long the trigger may take.
+    name: String,
+    timeout: f64,
+    loc: klar_interp::SourceLoc,
+}
+
 impl Run<'_, '_> {
-    /// Runs a [`OpKind::SpindleSync`] op: waits for the trigger angle, then commands the
-    /// axes from the measured spindle angle every cycle until the end point.
+    /// Starts a [`OpKind::SpindleSync`] op: checks the spindle and the axes, and fixes the
+    /// trigger angle; [`Run::sync_step`] then runs it cycle by cycle.
     pub(super) fn spindle_sync(&mut self, op: &Op) -> Result<(), RunError> {
         let loc = op.loc;
         self.settle_all()?;
@@ -256,65 +273,83 @@ impl Run<'_, '_> {
         };
         let dir = commanded.signum();
         let period = self.config.servo_period;
-        let phi_in = profile.run_in_degrees();
-        let total = profile.total_degrees();
         // The trigger, as an angle in the direction of rotation: the next one at least a
         // cycle's travel ahead that puts the spindle on the start angle when the run-in ends.
         let (psi_now, w_now) = self.spindle_angle(dir);
-        let trigger_mod = (dir * profile.start_angle - phi_in).rem_euclid(360.0);
+        let trigger_mod = (dir * profile.start_angle - profile.run_in_degrees()).rem_euclid(360.0);
         let ahead = psi_now + w_now * period;
         let mut trigger = ahead - ahead.rem_euclid(360.0) + trigger_mod;
         if trigger < ahead {
             trigger += 360.0;
         }
-        let waited_from = self.t;
-        let mut cutting = false;
-        loop {
-            let (psi, w) = self.spindle_angle(dir);
-            let phi = psi + w * period - trigger;
-            if phi < 0.0 {
-                if self.t - waited_from > timeout {
-                    return Err(RunError::Spindle {
-                        message: format!(
-                            "{name}: the thread pass did not reach its start angle within \
-                             {timeout} s"
-                        ),
-                        line: loc.line,
-                    });
-                }
-                self.hold_cycle()?;
-                continue;
-            }
-            if !cutting && phi >= phi_in {
-                cutting = true;
-                if let Some(s) = self.io.spindle_mut() {
-                    s.set_load(profile.section);
-                }
-            }
-            let done = phi >= total;
-            let (s, rate) = profile.at(phi);
-            let pose = if done { profile.to } else { profile.pose(s) };
-            let velocity = if done {
-                [0.0; 9]
-            } else {
-                profile.velocity(rate, w)
-            };
-            self.geared_cycle(pose, velocity, loc)?;
-            if let Some(sp) = self.io.spindle_mut()
-                && let Some(fault) = sp.feedback().fault.clone()
-            {
-                let message = sp.describe_fault(&fault);
+        self.sync = Some(SyncPass {
+            profile,
+            dir,
+            trigger,
+            waited_from: self.t,
+            cutting: false,
+            name,
+            timeout,
+            loc,
+        });
+        Ok(())
+    }
+
+    /// One servo cycle of the pass under way: waiting for the trigger angle, or commanding
+    /// the path position of the predicted spindle angle. The pass ends on its end point.
+    pub(super) fn sync_step(&mut self) -> Result<(), RunError> {
+        let Some(pass) = self.sync.take() else {
+            return Ok(());
+        };
+        let period = self.config.servo_period;
+        let (psi, w) = self.spindle_angle(pass.dir);
+        let phi = psi + w * period - pass.trigger;
+        let loc = pass.loc;
+        if phi < 0.0 {
+            if self.t - pass.waited_from > pass.timeout {
                 return Err(RunError::Spindle {
-                    message,
+                    message: format!(
+                        "{}: the thread pass did not reach its start angle within {} s",
+                        pass.name, pass.timeout
+                    ),
                     line: loc.line,
                 });
             }
-            if done {
-                break;
+            self.sync = Some(pass);
+            return self.hold_cycle();
+        }
+        let mut pass = pass;
+        if !pass.cutting && phi >= pass.profile.run_in_degrees() {
+            pass.cutting = true;
+            if let Some(s) = self.io.spindle_mut() {
+                s.set_load(pass.profile.section);
             }
         }
-        if let Some(s) = self.io.spindle_mut() {
-            s.set_load(0.0);
+        let done = phi >= pass.profile.total_degrees();
+        let (s, rate) = pass.profile.at(phi);
+        let (pose, velocity) = if done {
+            (pass.profile.to, [0.0; 9])
+        } else {
+            (pass.profile.pose(s), pass.profile.velocity(rate, w))
+        };
+        if done {
+            if let Some(s) = self.io.spindle_mut() {
+                s.set_load(0.0);
+            }
+        } else {
+            self.sync = Some(pass);
+        }
+        self.geared_cycle(pose, velocity, loc)?;
+        if let Some(sp) = self.io.spindle_mut()
+            && let Some(fault) = sp.feedback().fault.clone()
+        {
+            // The axes are geared to a spindle that no longer follows: the pass ends here.
+            let message = sp.describe_fault(&fault);
+            self.sync = None;
+            return Err(RunError::Spindle {
+                message,
+                line: loc.line,
+            });
         }
         Ok(())
     }
