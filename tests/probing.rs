@@ -378,3 +378,56 @@ fn probing_errors_name_their_cause_at_their_block() {
         err.message
     );
 }
+
+#[test]
+fn measuring_cycles_421_424_427_report_size_and_deviation() {
+    let c421 = "TCH PROBE 421 MEASURE HOLE ~
+  Q273=-25 ;CENTER IN 1ST AXIS ~
+  Q274=-10 ;CENTER IN 2ND AXIS ~
+  Q262=+24 ;NOMINAL DIAMETER ~
+  Q325=+0 ;STARTING ANGLE ~
+  Q247=+120 ;STEPPING ANGLE ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+1 ;MOVE TO CLEARANCE ~
+  Q275=+24.1 ;MAXIMUM LIMIT ~
+  Q276=+23.9 ;MINIMUM LIMIT ~
+  Q423=+3 ;NO. OF PROBE POINTS
+";
+    let (it, _) = run_body("probe421.h", c421);
+    let c = program_of([-25.0, -10.0]);
+    close("Q151", it.q(151), c[0], MM);
+    close("Q153", it.q(153), 24.0, MM);
+    close("Q161", it.q(161), c[0] + 25.0, MM);
+    close("Q162", it.q(162), c[1] + 10.0, MM);
+    close("Q163", it.q(163), 0.0, MM);
+
+    let c424 = "TCH PROBE 424 MEAS. RECTAN. OUTS. ~
+  Q273=+0 ;CENTER IN 1ST AXIS ~
+  Q274=+0 ;CENTER IN 2ND AXIS ~
+  Q282=+100.5 ;1ST SIDE LENGTH ~
+  Q283=+80 ;2ND SIDE LENGTH ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+1 ;MOVE TO CLEARANCE
+TCH PROBE 427 MEASURE COORDINATE ~
+  Q263=+70 ;1ST POINT 1ST AXIS ~
+  Q264=+0 ;1ST POINT 2ND AXIS ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+0 ;SET-UP CLEARANCE ~
+  Q272=+1 ;MEASURING AXIS ~
+  Q267=-1 ;TRAVERSE DIRECTION ~
+  Q260=+20 ;CLEARANCE HEIGHT
+";
+    let (it, _) = run_body("probe424.h", &format!("{C400}{c424}"));
+    let c = aligned_of([0.0, 0.0]);
+    close("Q154", it.q(154), 100.0, MM);
+    close("Q164", it.q(164), -0.5, MM);
+    close("Q161", it.q(161), c[0], MM);
+    close("Q160", it.q(160), aligned_of([50.0, 0.0])[0], MM);
+    // a measuring cycle leaves the preset alone
+    let (xyz, _) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0], 1e-12);
+}
