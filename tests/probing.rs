@@ -431,3 +431,25 @@ TCH PROBE 427 MEASURE COORDINATE ~
     let (xyz, _) = preset1(&it);
     close("preset X", xyz[0], ORIGIN[0], 1e-12);
 }
+
+#[test]
+fn cycle_401_turns_the_preset_by_the_line_through_two_bores() {
+    let body = "Q1 = ATAN(35 / 60)
+TCH PROBE 401 ROT OF 2 HOLES ~
+  Q268=-25 ;1ST CENTER 1ST AXIS ~
+  Q269=-10 ;1ST CENTER 2ND AXIS ~
+  Q270=+35 ;2ND CENTER 1ST AXIS ~
+  Q271=+25 ;2ND CENTER 2ND AXIS ~
+  Q261=-5 ;MEASURING HEIGHT ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q307=+Q1 ;PRESET ROTATION ANG. ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q402=+0 ;COMPENSATION ~
+  Q337=+0 ;SET TO ZERO
+";
+    let (it, _) = run_body("probe401.h", body);
+    let nominal = 35.0f64.atan2(60.0).to_degrees();
+    close("Q150", it.q(150), nominal + TURN, DEG);
+    let (_, rot) = preset1(&it);
+    close("preset ROT", rot, TURN, DEG);
+}

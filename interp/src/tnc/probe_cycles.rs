@@ -10,6 +10,10 @@
 //!   edge against its axis is Q150; the basic rotation becomes that angle minus the nominal
 //!   angle Q307 (added to the basic rotation already active) and goes to preset row Q305
 //!   (0: the active preset, which turns at once).
+//! - **401**: the basic rotation from the line through the centres of two bores (Q268/Q269
+//!   and Q270/Q271, each probed from its nominal centre outward at four points): Q150 the
+//!   line's angle against the reference axis, the basic rotation grows by Q150 − Q307 as
+//!   for 400. **404** writes Q307 as the basic rotation of row Q305.
 //! - **410/411**: the centre Q321/Q322 and side lengths Q323 (reference axis) and Q324 (minor
 //!   axis) are nominal values; the four touch points lie on the two lines through the centre
 //!   parallel to the axes. 410 probes from inside outward, starting from the centre when the
@@ -146,6 +150,12 @@ impl Machine {
         let centre = [(273, 321), (274, 322)];
         match def.number {
             400 => self.cycle400(def, true, run, out),
+            401 => self.cycle401(def, run, out),
+            404 => {
+                let rot = self.opt(def, 307, 0.0);
+                let xf = self.cyc.xf;
+                self.write_preset(def.number, def, xf, &[None; 9], Some(rot), out, run.loc)
+            }
             420 => self.cycle400(def, false, run, out),
             410 | 411 => self.cycle41x_rect(def, def.number == 410, true, run, out),
             412 | 413 => self.cycle41x_circle(def, def.number == 412, true, run, out),
@@ -215,6 +225,62 @@ impl Machine {
         xf.basic_rot += measured - nominal;
         let rot = xf.basic_rot;
         self.write_preset(cycle, def, xf, &[None; 9], Some(rot), out, run.loc)
+    }
+
+    /// The centre of a bore probed from `c` outward at four points (0°, 90°, 180°, 270°).
+    fn hole_centre(
+        &mut self,
+        c: [f64; 2],
+        h: f64,
+        clear: f64,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<[f64; 2], ExecError> {
+        self.go_to_point(c, h, clear, true, run, out);
+        let mut pts = Vec::with_capacity(4);
+        for (k, d) in [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]
+            .iter()
+            .enumerate()
+        {
+            run.point += u32::from(k > 0);
+            let t = self.probe_from_here([d[0], d[1], 0.0], run, out)?;
+            pts.push([t[0], t[1]]);
+        }
+        self.up_to(clear, run, out);
+        fit_circle(&pts)
+            .map(|(c, _)| c)
+            .ok_or(perr(ProbeError::Bad {
+                cycle: run.cycle,
+                what: "the touch points do not make a circle".into(),
+            }))
+    }
+
+    /// 401: the basic rotation from the centres of two bores.
+    fn cycle401(
+        &mut self,
+        def: &CycleDef,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        if self.opt(def, 402, 0.0) != 0.0 {
+            return Err(perr(ProbeError::Bad {
+                cycle: def.number,
+                what: "Q402=1 (align with the rotary table) is not supported yet".into(),
+            }));
+        }
+        let h1 = [self.need(def, 268)?, self.need(def, 269)?];
+        let h2 = [self.need(def, 270)?, self.need(def, 271)?];
+        let h = self.need(def, 261)?;
+        let clear = self.need(def, 260)?;
+        let c1 = self.hole_centre(h1, h, clear, run, out)?;
+        let c2 = self.hole_centre(h2, h, clear, Run { point: 5, ..run }, out)?;
+        let measured = (c2[1] - c1[1]).atan2(c2[0] - c1[0]).to_degrees();
+        self.set_q(150, measured);
+        let nominal = self.opt(def, 307, 0.0);
+        let mut xf = self.cyc.xf;
+        xf.basic_rot += measured - nominal;
+        let rot = xf.basic_rot;
+        self.write_preset(def.number, def, xf, &[None; 9], Some(rot), out, run.loc)
     }
 
     fn cycle41x_rect(
