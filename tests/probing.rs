@@ -453,3 +453,63 @@ TCH PROBE 401 ROT OF 2 HOLES ~
     let (_, rot) = preset1(&it);
     close("preset ROT", rot, TURN, DEG);
 }
+
+#[test]
+fn a_preset_written_to_another_row_acts_when_cycle_247_activates_it() {
+    let body = "TCH PROBE 412 PRESET INSIDE CIRCLE ~
+  Q321=-25 ;CENTER IN 1ST AXIS ~
+  Q322=-10 ;CENTER IN 2ND AXIS ~
+  Q262=+24 ;NOMINAL DIAMETER ~
+  Q325=+0 ;STARTING ANGLE ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+1 ;MOVE TO CLEARANCE ~
+  Q305=+2 ;NUMBER IN TABLE ~
+  Q331=+10 ;DATUM ~
+  Q332=-5 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+1 ;PROBE IN TS AXIS ~
+  Q382=-40 ;1ST CO. FOR TS AXIS ~
+  Q383=+30 ;2ND CO. FOR TS AXIS ~
+  Q384=+0 ;3RD CO. FOR TS AXIS ~
+  Q333=+1 ;DATUM
+L X+0 Y+0 Z+50 FMAX
+CYCL DEF 247 DATUM SETTING ~
+  Q339=+2 ;DATUM NUMBER
+L X+10 Y-5 Z+1 FMAX
+";
+    let text = format!("{PRELUDE}{body}M30\nEND PGM PROBE MM\n");
+    let path = common::temp_program("probe_row2.h", &text);
+    let m = machine();
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let line_of = |start: &str| {
+        text.lines()
+            .position(|l| l.starts_with(start))
+            .map(|i| i as u32 + 1)
+    };
+    let over_old = line_of("L X+0 Y+0 Z+50");
+    let mut last = None;
+    let mut before_247 = None;
+    for op in it.by_ref() {
+        let op = op.expect("runs");
+        if let klar_interp::OpKind::Line { to, .. } = op.kind {
+            if Some(op.loc.line) == over_old {
+                before_247 = Some(to);
+            }
+            last = Some(to);
+        }
+    }
+    // row 1 stays active until 247: the move to X+0 Y+0 is the old datum
+    let b = before_247.expect("the move before 247");
+    close("X before 247", b[klar_interp::AxisLetter::X], ORIGIN[0], MM);
+    // after 247 the point Q331/Q332/Q333 of row 2 is the bore centre on the top
+    let c = program_of([-25.0, -10.0]);
+    let end = last.expect("moves");
+    close("X", end[klar_interp::AxisLetter::X], ORIGIN[0] + c[0], MM);
+    close("Y", end[klar_interp::AxisLetter::Y], ORIGIN[1] + c[1], MM);
+    close("Z", end[klar_interp::AxisLetter::Z], ORIGIN[2] + OFF[2], MM);
+    let (table, active) = it.presets();
+    assert_eq!(active, Some(2));
+    assert!(table.and_then(|t| t.row(2)).is_some());
+}
