@@ -318,6 +318,8 @@ fn cycles_0_and_1_measure_from_their_pre_position() {
     let body = "TCH PROBE 0.0 REF. PLANE Q10 Z-
 TCH PROBE 0.1 X+30 Y+25 Z+5
 Q11 = Q117
+L Z+20 FMAX
+L X+60 Y+0 FMAX
 TCH PROBE 1.0 POLAR DATUM
 TCH PROBE 1.1 X ANGLE: +180
 TCH PROBE 1.2 X+60 Y+0 Z-10
@@ -362,12 +364,29 @@ fn probing_errors_name_their_cause_at_their_block() {
         "{}",
         err.message
     );
+    assert_eq!(err.line, 6);
 
-    // the pre-position of cycle 0 inside the part: the stylus touches before it moves
+    // a pre-position inside the part: the stylus meets it on the way there
+    let path = common::temp_program(
+        "probe_collision.h",
+        &format!(
+            "{PRELUDE}TCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
+        ),
+    );
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let err = it.find_map(Result::err).expect("refused");
+    assert!(
+        err.message.contains("touch probe collision"),
+        "{}",
+        err.message
+    );
+    assert_eq!(err.line, 7);
+
+    // a probe standing inside the part (moved there by an ordinary block): already in contact
     let path = common::temp_program(
         "probe_inside.h",
         &format!(
-            "{PRELUDE}TCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
+            "{PRELUDE}L X+0 Y+20 Z-5 FMAX\nTCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
         ),
     );
     let mut it = m.open_program(&path, m.start_pose()).expect("opens");
@@ -377,6 +396,7 @@ fn probing_errors_name_their_cause_at_their_block() {
         "{}",
         err.message
     );
+    assert_eq!(err.line, 8);
 }
 
 #[test]

@@ -209,11 +209,11 @@ impl Machine {
         for (k, p) in [p1, p2].iter().enumerate() {
             run.point = k as u32 + 1;
             let start = [p[0] - dir[0] * lead, p[1] - dir[1] * lead];
-            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            self.go_to_point(start, h, clear, k == 0 || high, run, out)?;
             let t = self.touch_surface(dir, run, out)?;
             s[k] = [t[0], t[1]];
         }
-        self.up_to(clear, run, out);
+        self.up_to(clear, run, out)?;
         let raw = (s[1][1] - s[0][1]).atan2(s[1][0] - s[0][0]).to_degrees();
         let measured = line_angle(if axis == 1.0 { raw } else { raw - 90.0 });
         self.set_q(150, measured);
@@ -236,7 +236,7 @@ impl Machine {
         mut run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<[f64; 2], ExecError> {
-        self.go_to_point(c, h, clear, true, run, out);
+        self.go_to_point(c, h, clear, true, run, out)?;
         let mut pts = Vec::with_capacity(4);
         for (k, d) in [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]
             .iter()
@@ -246,7 +246,7 @@ impl Machine {
             let t = self.probe_from_here([d[0], d[1], 0.0], run, out)?;
             pts.push([t[0], t[1]]);
         }
-        self.up_to(clear, run, out);
+        self.up_to(clear, run, out)?;
         fit_circle(&pts)
             .map(|(c, _)| c)
             .ok_or(perr(ProbeError::Bad {
@@ -324,17 +324,16 @@ impl Machine {
                     c[1] + (prev[1] + nrm[1]) * (half[1] + lead),
                 ];
                 let p = self.plane_pos();
-                let f = self.positioning();
-                self.probe_line([corner[0], corner[1], p[2]], f, run, out);
+                self.position_to([corner[0], corner[1], p[2]], run, out)?;
             }
-            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            self.go_to_point(start, h, clear, k == 0 || high, run, out)?;
             let t = self.touch_surface(dir, run, out)?;
             hits[k] = t[i];
         }
         if datum {
             self.tool_axis_datum(def, run, out)?;
         }
-        self.up_to(clear, run, out);
+        self.up_to(clear, run, out)?;
         let centre = [(hits[0] + hits[2]) / 2.0, (hits[1] + hits[3]) / 2.0];
         let sides = [hits[2] - hits[0], hits[3] - hits[1]];
         let u = self.unit;
@@ -411,7 +410,7 @@ impl Machine {
                 });
                 self.pos = to;
             }
-            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            self.go_to_point(start, h, clear, k == 0 || high, run, out)?;
             let dir = if inside {
                 [u[0], u[1], 0.0]
             } else {
@@ -425,7 +424,7 @@ impl Machine {
         if datum {
             self.tool_axis_datum(def, run, out)?;
         }
-        self.up_to(clear, run, out);
+        self.up_to(clear, run, out)?;
         let (centre, ball_path) = fit_circle(&pts).ok_or(perr(ProbeError::Bad {
             cycle,
             what: "the touch points do not make a circle".into(),
@@ -465,7 +464,7 @@ impl Machine {
         let clear = self.need(def, 260)?;
         run.point += 1;
         let lead = self.lead(def);
-        self.go_to_point(p, nominal + lead, clear, true, run, out);
+        self.go_to_point(p, nominal + lead, clear, true, run, out)?;
         let t = self.touch_surface([0.0, 0.0, -1.0], run, out)?;
         self.probe.axis_hit = Some(t[2]);
         Ok(())
@@ -530,9 +529,9 @@ impl Machine {
         // the start lies the clearance before the point along the probing axis
         let mut start = [p[0], p[1], h];
         start[k] -= sign * lead;
-        self.go_to_point([start[0], start[1]], start[2], clear, true, run, out);
+        self.go_to_point([start[0], start[1]], start[2], clear, true, run, out)?;
         let t = self.touch_surface(dir, run, out)?;
-        self.up_to(clear, run, out);
+        self.up_to(clear, run, out)?;
         self.set_q(160, t[k] / self.unit);
         Ok(())
     }
@@ -565,10 +564,10 @@ impl Machine {
         let mut s = [[0.0; 3]; 3];
         for (k, p) in pts.iter().enumerate() {
             run.point = k as u32 + 1;
-            self.go_to_point([p[0], p[1]], p[2] + lead, clear, true, run, out);
+            self.go_to_point([p[0], p[1]], p[2] + lead, clear, true, run, out)?;
             s[k] = self.touch_surface([0.0, 0.0, -1.0], run, out)?;
         }
-        self.up_to(clear, run, out);
+        self.up_to(clear, run, out)?;
         let d1 = [s[1][0] - s[0][0], s[1][1] - s[0][1], s[1][2] - s[0][2]];
         let d2 = [s[2][0] - s[0][0], s[2][1] - s[0][1], s[2][2] - s[0][2]];
         let mut n = [
