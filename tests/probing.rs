@@ -318,6 +318,8 @@ fn cycles_0_and_1_measure_from_their_pre_position() {
     let body = "TCH PROBE 0.0 REF. PLANE Q10 Z-
 TCH PROBE 0.1 X+30 Y+25 Z+5
 Q11 = Q117
+L Z+20 FMAX
+L X+60 Y+0 FMAX
 TCH PROBE 1.0 POLAR DATUM
 TCH PROBE 1.1 X ANGLE: +180
 TCH PROBE 1.2 X+60 Y+0 Z-10
@@ -362,12 +364,29 @@ fn probing_errors_name_their_cause_at_their_block() {
         "{}",
         err.message
     );
+    assert_eq!(err.line, 6);
 
-    // the pre-position of cycle 0 inside the part: the stylus touches before it moves
+    // a pre-position inside the part: the stylus meets it on the way there
+    let path = common::temp_program(
+        "probe_collision.h",
+        &format!(
+            "{PRELUDE}TCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
+        ),
+    );
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let err = it.find_map(Result::err).expect("refused");
+    assert!(
+        err.message.contains("touch probe collision"),
+        "{}",
+        err.message
+    );
+    assert_eq!(err.line, 7);
+
+    // a probe standing inside the part (moved there by an ordinary block): already in contact
     let path = common::temp_program(
         "probe_inside.h",
         &format!(
-            "{PRELUDE}TCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
+            "{PRELUDE}L X+0 Y+20 Z-5 FMAX\nTCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
         ),
     );
     let mut it = m.open_program(&path, m.start_pose()).expect("opens");
@@ -377,4 +396,140 @@ fn probing_errors_name_their_cause_at_their_block() {
         "{}",
         err.message
     );
+    assert_eq!(err.line, 8);
+}
+
+#[test]
+fn measuring_cycles_421_424_427_report_size_and_deviation() {
+    let c421 = "TCH PROBE 421 MEASURE HOLE ~
+  Q273=-25 ;CENTER IN 1ST AXIS ~
+  Q274=-10 ;CENTER IN 2ND AXIS ~
+  Q262=+24 ;NOMINAL DIAMETER ~
+  Q325=+0 ;STARTING ANGLE ~
+  Q247=+120 ;STEPPING ANGLE ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+1 ;MOVE TO CLEARANCE ~
+  Q275=+24.1 ;MAXIMUM LIMIT ~
+  Q276=+23.9 ;MINIMUM LIMIT ~
+  Q423=+3 ;NO. OF PROBE POINTS
+";
+    let (it, _) = run_body("probe421.h", c421);
+    let c = program_of([-25.0, -10.0]);
+    close("Q151", it.q(151), c[0], MM);
+    close("Q153", it.q(153), 24.0, MM);
+    close("Q161", it.q(161), c[0] + 25.0, MM);
+    close("Q162", it.q(162), c[1] + 10.0, MM);
+    close("Q163", it.q(163), 0.0, MM);
+
+    let c424 = "TCH PROBE 424 MEAS. RECTAN. OUTS. ~
+  Q273=+0 ;CENTER IN 1ST AXIS ~
+  Q274=+0 ;CENTER IN 2ND AXIS ~
+  Q282=+100.5 ;1ST SIDE LENGTH ~
+  Q283=+80 ;2ND SIDE LENGTH ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+1 ;MOVE TO CLEARANCE
+TCH PROBE 427 MEASURE COORDINATE ~
+  Q263=+70 ;1ST POINT 1ST AXIS ~
+  Q264=+0 ;1ST POINT 2ND AXIS ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+0 ;SET-UP CLEARANCE ~
+  Q272=+1 ;MEASURING AXIS ~
+  Q267=-1 ;TRAVERSE DIRECTION ~
+  Q260=+20 ;CLEARANCE HEIGHT
+";
+    let (it, _) = run_body("probe424.h", &format!("{C400}{c424}"));
+    let c = aligned_of([0.0, 0.0]);
+    close("Q154", it.q(154), 100.0, MM);
+    close("Q164", it.q(164), -0.5, MM);
+    close("Q161", it.q(161), c[0], MM);
+    close("Q160", it.q(160), aligned_of([50.0, 0.0])[0], MM);
+    // a measuring cycle leaves the preset alone
+    let (xyz, _) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0], 1e-12);
+}
+
+#[test]
+fn cycle_401_turns_the_preset_by_the_line_through_two_bores() {
+    let body = "Q1 = ATAN(35 / 60)
+TCH PROBE 401 ROT OF 2 HOLES ~
+  Q268=-25 ;1ST CENTER 1ST AXIS ~
+  Q269=-10 ;1ST CENTER 2ND AXIS ~
+  Q270=+35 ;2ND CENTER 1ST AXIS ~
+  Q271=+25 ;2ND CENTER 2ND AXIS ~
+  Q261=-5 ;MEASURING HEIGHT ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q307=+Q1 ;PRESET ROTATION ANG. ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q402=+0 ;COMPENSATION ~
+  Q337=+0 ;SET TO ZERO
+";
+    let (it, _) = run_body("probe401.h", body);
+    let nominal = 35.0f64.atan2(60.0).to_degrees();
+    close("Q150", it.q(150), nominal + TURN, DEG);
+    let (_, rot) = preset1(&it);
+    close("preset ROT", rot, TURN, DEG);
+}
+
+#[test]
+fn a_preset_written_to_another_row_acts_when_cycle_247_activates_it() {
+    let body = "TCH PROBE 412 PRESET INSIDE CIRCLE ~
+  Q321=-25 ;CENTER IN 1ST AXIS ~
+  Q322=-10 ;CENTER IN 2ND AXIS ~
+  Q262=+24 ;NOMINAL DIAMETER ~
+  Q325=+0 ;STARTING ANGLE ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+1 ;MOVE TO CLEARANCE ~
+  Q305=+2 ;NUMBER IN TABLE ~
+  Q331=+10 ;DATUM ~
+  Q332=-5 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+1 ;PROBE IN TS AXIS ~
+  Q382=-40 ;1ST CO. FOR TS AXIS ~
+  Q383=+30 ;2ND CO. FOR TS AXIS ~
+  Q384=+0 ;3RD CO. FOR TS AXIS ~
+  Q333=+1 ;DATUM
+L X+0 Y+0 Z+50 FMAX
+CYCL DEF 247 DATUM SETTING ~
+  Q339=+2 ;DATUM NUMBER
+L X+10 Y-5 Z+1 FMAX
+";
+    let text = format!("{PRELUDE}{body}M30\nEND PGM PROBE MM\n");
+    let path = common::temp_program("probe_row2.h", &text);
+    let m = machine();
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let line_of = |start: &str| {
+        text.lines()
+            .position(|l| l.starts_with(start))
+            .map(|i| i as u32 + 1)
+    };
+    let over_old = line_of("L X+0 Y+0 Z+50");
+    let mut last = None;
+    let mut before_247 = None;
+    for op in it.by_ref() {
+        let op = op.expect("runs");
+        if let klar_interp::OpKind::Line { to, .. } = op.kind {
+            if Some(op.loc.line) == over_old {
+                before_247 = Some(to);
+            }
+            last = Some(to);
+        }
+    }
+    // row 1 stays active until 247: the move to X+0 Y+0 is the old datum
+    let b = before_247.expect("the move before 247");
+    close("X before 247", b[klar_interp::AxisLetter::X], ORIGIN[0], MM);
+    // after 247 the point Q331/Q332/Q333 of row 2 is the bore centre on the top
+    let c = program_of([-25.0, -10.0]);
+    let end = last.expect("moves");
+    close("X", end[klar_interp::AxisLetter::X], ORIGIN[0] + c[0], MM);
+    close("Y", end[klar_interp::AxisLetter::Y], ORIGIN[1] + c[1], MM);
+    close("Z", end[klar_interp::AxisLetter::Z], ORIGIN[2] + OFF[2], MM);
+    let (table, active) = it.presets();
+    assert_eq!(active, Some(2));
+    assert!(table.and_then(|t| t.row(2)).is_some());
 }

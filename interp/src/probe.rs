@@ -82,6 +82,16 @@ pub enum ProbeError {
         /// Touch point of the cycle, from 1.
         point: u32,
     },
+    /// The stylus met the workpiece on a positioning move.
+    #[error(
+        "touch probe collision: TCH PROBE {cycle}, on the way to touch point {point}, the stylus meets the workpiece outside a probing move"
+    )]
+    Collision {
+        /// Cycle number.
+        cycle: u32,
+        /// Touch point of the cycle the probe was moving to, from 1.
+        point: u32,
+    },
     /// A cycle number klar does not run.
     #[error("touch-probe cycle {0} not supported yet")]
     Unknown(u32),

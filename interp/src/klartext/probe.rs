@@ -47,3 +47,65 @@ impl Parser {
         Ok(Stmt::TouchProbe { number, sub })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tnc::expr::{ParamKind, ParamRef, Value};
+
+    fn parse(text: &str) -> Result<(Stmt, Parser), ProgramError> {
+        let mut p = Parser::default();
+        let b = p.parse(text.as_bytes()).map_err(|e| e.error)?;
+        Ok((b.stmt, p))
+    }
+
+    #[test]
+    fn current_format_keeps_the_q_assignments() {
+        let (s, p) =
+            parse("7 TCH PROBE 412 PRESET INSIDE CIRCLE ~\n  Q321=+50 ;CENTER ~\n  Q262=-Q5 ;DIA")
+                .expect("parses");
+        assert_eq!(
+            s,
+            Stmt::TouchProbe {
+                number: 412,
+                sub: None
+            }
+        );
+        assert_eq!(p.cycle.q.len(), 2);
+        assert_eq!(p.cycle.q[0].q, 321);
+        assert_eq!(p.cycle.q[1].q, 262);
+    }
+
+    #[test]
+    fn old_format_head_keeps_the_result_parameter_and_direction() {
+        let (s, p) = parse("5 TCH PROBE 0.0 REF. PLANE Q10 Z-").expect("parses");
+        assert_eq!(
+            s,
+            Stmt::TouchProbe {
+                number: 0,
+                sub: Some(0)
+            }
+        );
+        let q10 = ParamRef {
+            kind: ParamKind::Q,
+            index: 10,
+        };
+        assert_eq!(
+            p.cycle.items.first().and_then(|i| i.value),
+            Some(Value::Param {
+                param: q10,
+                negate: false
+            })
+        );
+        let z = p.cycle.items.get(1).expect("direction");
+        assert_eq!((z.word(), z.sign_only), (&b"Z"[..], Some(true)));
+        let (_, p) = parse("6 TCH PROBE 1.1 X WINKEL: +30").expect("parses");
+        assert_eq!(p.cycle.items.len(), 2);
+    }
+
+    #[test]
+    fn tch_without_probe_or_number_is_an_error() {
+        assert!(parse("5 TCH 412").is_err());
+        assert!(parse("5 TCH PROBE ABC").is_err());
+    }
+}

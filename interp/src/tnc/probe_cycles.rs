@@ -1,6 +1,7 @@
 //! The current-format touch-probe cycles: 400 (basic rotation from two points on a
 //! straight edge), 410/411 (preset in the centre of a rectangular pocket / stud), 412/413
-//! (preset in the centre of a bore / circular stud) and 431 (measure a plane).
+//! (preset in the centre of a bore / circular stud), the measuring cycles 420–424 and 427,
+//! and 431 (measure a plane).
 //!
 //! Each cycle's rules, as klar applies them from the TNC 640 touch-probe manual:
 //! - **400**: touch points 1 (Q263/Q264) and 2 (Q265/Q266) lie on one edge; Q272=1 means the
@@ -9,6 +10,10 @@
 //!   edge against its axis is Q150; the basic rotation becomes that angle minus the nominal
 //!   angle Q307 (added to the basic rotation already active) and goes to preset row Q305
 //!   (0: the active preset, which turns at once).
+//! - **401**: the basic rotation from the line through the centres of two bores (Q268/Q269
+//!   and Q270/Q271, each probed from its nominal centre outward at four points): Q150 the
+//!   line's angle against the reference axis, the basic rotation grows by Q150 − Q307 as
+//!   for 400. **404** writes Q307 as the basic rotation of row Q305.
 //! - **410/411**: the centre Q321/Q322 and side lengths Q323 (reference axis) and Q324 (minor
 //!   axis) are nominal values; the four touch points lie on the two lines through the centre
 //!   parallel to the axes. 410 probes from inside outward, starting from the centre when the
@@ -24,6 +29,13 @@
 //!   when the part is off its nominal centre and the ball meets the wall at a slant.
 //! - 410 … 413 with Q381=1 also probe the probe axis at Q382/Q383 (nominal height Q384) and
 //!   set the datum of that axis to Q333. The measured centre becomes Q331/Q332.
+//! - **420** (measure angle), **421/422** (measure bore / boss, nominal centre Q273/Q274),
+//!   **423/424** (measure rectangle inside / outside, nominal sides Q282/Q283) probe like
+//!   400, 412/413 and 410/411 but write no preset; they add the deviations from nominal:
+//!   Q161/Q162 of the centre, Q163 of the diameter, Q164/Q165 of the sides. Their
+//!   tolerance limits and program stop (Q275 …, Q309) are not checked yet.
+//! - **427**: one coordinate at Q263/Q264 (height Q261) along axis Q272 (1, 2, 3 = tool
+//!   axis) in direction Q267; Q160 the coordinate.
 //! - **431**: three points (Q263/Q264/Q294, Q265/Q266/Q295, Q296/Q297/Q298) probed downward
 //!   along the tool axis; Q173 … Q175 the heights measured, Q158/Q159 the projection angles
 //!   about the reference and the minor axis, Q170 … Q172 the spatial angles A, B, C of the
@@ -85,6 +97,17 @@ pub(crate) fn fit_circle(pts: &[[f64; 2]]) -> Option<([f64; 2], f64)> {
     (rr > 0.0).then(|| ([c[0] + mu[0], c[1] + mu[1]], rr.sqrt()))
 }
 
+/// `def` with parameters renamed `(from, to)`: a measuring cycle read as its preset twin.
+fn renamed(def: &CycleDef, names: &[(u32, u32)]) -> CycleDef {
+    let mut d = def.clone();
+    for (key, _) in d.params.iter_mut() {
+        if let Some((_, to)) = names.iter().find(|(from, _)| *key == ParamKey::Q(*from)) {
+            *key = ParamKey::Q(*to);
+        }
+    }
+    d
+}
+
 /// Degrees in (−90°, 90°]: the angle of an undirected line.
 fn line_angle(deg: f64) -> f64 {
     let a = deg.rem_euclid(180.0);
@@ -123,10 +146,28 @@ impl Machine {
         run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<(), ExecError> {
+        // the measuring cycles probe as their preset twins, under their own parameter numbers
+        let centre = [(273, 321), (274, 322)];
         match def.number {
-            400 => self.cycle400(def, run, out),
-            410 | 411 => self.cycle41x_rect(def, run, out),
-            412 | 413 => self.cycle41x_circle(def, run, out),
+            400 => self.cycle400(def, true, run, out),
+            401 => self.cycle401(def, run, out),
+            404 => {
+                let rot = self.opt(def, 307, 0.0);
+                let xf = self.cyc.xf;
+                self.write_preset(def.number, def, xf, &[None; 9], Some(rot), out, run.loc)
+            }
+            420 => self.cycle400(def, false, run, out),
+            410 | 411 => self.cycle41x_rect(def, def.number == 410, true, run, out),
+            412 | 413 => self.cycle41x_circle(def, def.number == 412, true, run, out),
+            421 | 422 => {
+                let d = renamed(def, &centre);
+                self.cycle41x_circle(&d, def.number == 421, false, run, out)
+            }
+            423 | 424 => {
+                let d = renamed(def, &[centre[0], centre[1], (282, 323), (283, 324)]);
+                self.cycle41x_rect(&d, def.number == 423, false, run, out)
+            }
+            427 => self.cycle427(def, run, out),
             431 => self.cycle431(def, run, out),
             n => Err(perr(ProbeError::Unknown(n))),
         }
@@ -140,6 +181,7 @@ impl Machine {
     fn cycle400(
         &mut self,
         def: &CycleDef,
+        datum: bool,
         mut run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<(), ExecError> {
@@ -167,14 +209,17 @@ impl Machine {
         for (k, p) in [p1, p2].iter().enumerate() {
             run.point = k as u32 + 1;
             let start = [p[0] - dir[0] * lead, p[1] - dir[1] * lead];
-            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            self.go_to_point(start, h, clear, k == 0 || high, run, out)?;
             let t = self.touch_surface(dir, run, out)?;
             s[k] = [t[0], t[1]];
         }
-        self.up_to(clear, run, out);
+        self.up_to(clear, run, out)?;
         let raw = (s[1][1] - s[0][1]).atan2(s[1][0] - s[0][0]).to_degrees();
         let measured = line_angle(if axis == 1.0 { raw } else { raw - 90.0 });
         self.set_q(150, measured);
+        if !datum {
+            return Ok(());
+        }
         let nominal = self.opt(def, 307, 0.0);
         let mut xf = self.cyc.xf;
         xf.basic_rot += measured - nominal;
@@ -182,13 +227,70 @@ impl Machine {
         self.write_preset(cycle, def, xf, &[None; 9], Some(rot), out, run.loc)
     }
 
+    /// The centre of a bore probed from `c` outward at four points (0°, 90°, 180°, 270°).
+    fn hole_centre(
+        &mut self,
+        c: [f64; 2],
+        h: f64,
+        clear: f64,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<[f64; 2], ExecError> {
+        self.go_to_point(c, h, clear, true, run, out)?;
+        let mut pts = Vec::with_capacity(4);
+        for (k, d) in [[1.0, 0.0], [0.0, 1.0], [-1.0, 0.0], [0.0, -1.0]]
+            .iter()
+            .enumerate()
+        {
+            run.point += u32::from(k > 0);
+            let t = self.probe_from_here([d[0], d[1], 0.0], run, out)?;
+            pts.push([t[0], t[1]]);
+        }
+        self.up_to(clear, run, out)?;
+        fit_circle(&pts)
+            .map(|(c, _)| c)
+            .ok_or(perr(ProbeError::Bad {
+                cycle: run.cycle,
+                what: "the touch points do not make a circle".into(),
+            }))
+    }
+
+    /// 401: the basic rotation from the centres of two bores.
+    fn cycle401(
+        &mut self,
+        def: &CycleDef,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        if self.opt(def, 402, 0.0) != 0.0 {
+            return Err(perr(ProbeError::Bad {
+                cycle: def.number,
+                what: "Q402=1 (align with the rotary table) is not supported yet".into(),
+            }));
+        }
+        let h1 = [self.need(def, 268)?, self.need(def, 269)?];
+        let h2 = [self.need(def, 270)?, self.need(def, 271)?];
+        let h = self.need(def, 261)?;
+        let clear = self.need(def, 260)?;
+        let c1 = self.hole_centre(h1, h, clear, run, out)?;
+        let c2 = self.hole_centre(h2, h, clear, Run { point: 5, ..run }, out)?;
+        let measured = (c2[1] - c1[1]).atan2(c2[0] - c1[0]).to_degrees();
+        self.set_q(150, measured);
+        let nominal = self.opt(def, 307, 0.0);
+        let mut xf = self.cyc.xf;
+        xf.basic_rot += measured - nominal;
+        let rot = xf.basic_rot;
+        self.write_preset(def.number, def, xf, &[None; 9], Some(rot), out, run.loc)
+    }
+
     fn cycle41x_rect(
         &mut self,
         def: &CycleDef,
+        inside: bool,
+        datum: bool,
         mut run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<(), ExecError> {
-        let inside = def.number == 410;
         let c = [self.need(def, 321)?, self.need(def, 322)?];
         let half = [self.need(def, 323)? / 2.0, self.need(def, 324)? / 2.0];
         let h = self.need(def, 261)?;
@@ -222,31 +324,42 @@ impl Machine {
                     c[1] + (prev[1] + nrm[1]) * (half[1] + lead),
                 ];
                 let p = self.plane_pos();
-                let f = self.positioning();
-                self.probe_line([corner[0], corner[1], p[2]], f, run, out);
+                self.position_to([corner[0], corner[1], p[2]], run, out)?;
             }
-            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            self.go_to_point(start, h, clear, k == 0 || high, run, out)?;
             let t = self.touch_surface(dir, run, out)?;
             hits[k] = t[i];
         }
-        self.tool_axis_datum(def, run, out)?;
-        self.up_to(clear, run, out);
+        if datum {
+            self.tool_axis_datum(def, run, out)?;
+        }
+        self.up_to(clear, run, out)?;
         let centre = [(hits[0] + hits[2]) / 2.0, (hits[1] + hits[3]) / 2.0];
-        self.set_q(151, centre[0] / self.unit);
-        self.set_q(152, centre[1] / self.unit);
-        self.set_q(154, (hits[2] - hits[0]) / self.unit);
-        self.set_q(155, (hits[3] - hits[1]) / self.unit);
+        let sides = [hits[2] - hits[0], hits[3] - hits[1]];
+        let u = self.unit;
+        self.set_q(151, centre[0] / u);
+        self.set_q(152, centre[1] / u);
+        self.set_q(154, sides[0] / u);
+        self.set_q(155, sides[1] / u);
+        if !datum {
+            self.set_q(161, (centre[0] - c[0]) / u);
+            self.set_q(162, (centre[1] - c[1]) / u);
+            self.set_q(164, (sides[0] - 2.0 * half[0]) / u);
+            self.set_q(165, (sides[1] - 2.0 * half[1]) / u);
+            return Ok(());
+        }
         self.centre_datum(def, centre, run, out)
     }
 
     fn cycle41x_circle(
         &mut self,
         def: &CycleDef,
+        inside: bool,
+        datum: bool,
         mut run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<(), ExecError> {
         let cycle = def.number;
-        let inside = cycle == 412;
         let c = [self.need(def, 321)?, self.need(def, 322)?];
         let r = self.need(def, 262)? / 2.0;
         let start_angle = self.opt(def, 325, 0.0);
@@ -297,7 +410,7 @@ impl Machine {
                 });
                 self.pos = to;
             }
-            self.go_to_point(start, h, clear, k == 0 || high, run, out);
+            self.go_to_point(start, h, clear, k == 0 || high, run, out)?;
             let dir = if inside {
                 [u[0], u[1], 0.0]
             } else {
@@ -308,8 +421,10 @@ impl Machine {
             let t = self.probe_from_here(dir, run, out)?;
             pts.push([t[0], t[1]]);
         }
-        self.tool_axis_datum(def, run, out)?;
-        self.up_to(clear, run, out);
+        if datum {
+            self.tool_axis_datum(def, run, out)?;
+        }
+        self.up_to(clear, run, out)?;
         let (centre, ball_path) = fit_circle(&pts).ok_or(perr(ProbeError::Bad {
             cycle,
             what: "the touch points do not make a circle".into(),
@@ -323,6 +438,12 @@ impl Machine {
         self.set_q(151, centre[0] / self.unit);
         self.set_q(152, centre[1] / self.unit);
         self.set_q(153, 2.0 * radius / self.unit);
+        if !datum {
+            self.set_q(161, (centre[0] - c[0]) / self.unit);
+            self.set_q(162, (centre[1] - c[1]) / self.unit);
+            self.set_q(163, 2.0 * (radius - r) / self.unit);
+            return Ok(());
+        }
         self.centre_datum(def, centre, run, out)
     }
 
@@ -343,7 +464,7 @@ impl Machine {
         let clear = self.need(def, 260)?;
         run.point += 1;
         let lead = self.lead(def);
-        self.go_to_point(p, nominal + lead, clear, true, run, out);
+        self.go_to_point(p, nominal + lead, clear, true, run, out)?;
         let t = self.touch_surface([0.0, 0.0, -1.0], run, out)?;
         self.probe.axis_hit = Some(t[2]);
         Ok(())
@@ -370,6 +491,49 @@ impl Machine {
             out,
             run.loc,
         )
+    }
+
+    /// 427: one coordinate, probed at Q263/Q264 (measuring height Q261) along axis Q272
+    /// (1 reference, 2 minor, 3 tool axis) in direction Q267; Q160 the coordinate measured.
+    fn cycle427(
+        &mut self,
+        def: &CycleDef,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let p = [self.need(def, 263)?, self.need(def, 264)?];
+        let h = self.need(def, 261)?;
+        let clear = self.need(def, 260)?;
+        let axis = self.opt(def, 272, 1.0);
+        let sign = self.opt(def, 267, 1.0);
+        let k = match axis {
+            1.0 => 0,
+            2.0 => 1,
+            3.0 => 2,
+            _ => {
+                return Err(perr(ProbeError::Bad {
+                    cycle: def.number,
+                    what: "Q272 must be 1, 2 or 3".into(),
+                }));
+            }
+        };
+        if !(sign == 1.0 || sign == -1.0) {
+            return Err(perr(ProbeError::Bad {
+                cycle: def.number,
+                what: "Q267 must be +1 or -1".into(),
+            }));
+        }
+        let mut dir = [0.0; 3];
+        dir[k] = sign;
+        let lead = self.lead(def);
+        // the start lies the clearance before the point along the probing axis
+        let mut start = [p[0], p[1], h];
+        start[k] -= sign * lead;
+        self.go_to_point([start[0], start[1]], start[2], clear, true, run, out)?;
+        let t = self.touch_surface(dir, run, out)?;
+        self.up_to(clear, run, out)?;
+        self.set_q(160, t[k] / self.unit);
+        Ok(())
     }
 
     fn cycle431(
@@ -400,10 +564,10 @@ impl Machine {
         let mut s = [[0.0; 3]; 3];
         for (k, p) in pts.iter().enumerate() {
             run.point = k as u32 + 1;
-            self.go_to_point([p[0], p[1]], p[2] + lead, clear, true, run, out);
+            self.go_to_point([p[0], p[1]], p[2] + lead, clear, true, run, out)?;
             s[k] = self.touch_surface([0.0, 0.0, -1.0], run, out)?;
         }
-        self.up_to(clear, run, out);
+        self.up_to(clear, run, out)?;
         let d1 = [s[1][0] - s[0][0], s[1][1] - s[0][1], s[1][2] - s[0][2]];
         let d2 = [s[2][0] - s[0][0], s[2][1] - s[0][1], s[2][2] - s[0][2]];
         let mut n = [

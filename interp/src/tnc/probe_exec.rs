@@ -22,6 +22,9 @@
 //!   well). The preset is chosen so that the measured point reads Q331/Q332 (Q333 in the
 //!   probe axis) afterwards.
 //!
+//! - a positioning move on which the stylus meets the part stops the program (a collision of
+//!   the probe: on the machine the stylus deflects outside a probing move);
+//!
 //! Not modelled: the tilted working plane (probing is refused in it), probing in the datum
 //! table (Q303=0), and the stylus deflection after the trigger (the simulated axes stop on
 //! the trigger point, which the interpreter knows before the move).
@@ -161,26 +164,63 @@ impl Machine {
         high: bool,
         run: Run,
         out: &mut VecDeque<Op>,
-    ) {
+    ) -> Result<(), ExecError> {
         let p = self.plane_pos();
-        let f = self.positioning();
         if high {
             let top = p[2].max(clear);
-            self.probe_line([p[0], p[1], top], f, run, out);
-            self.probe_line([start[0], start[1], top], f, run, out);
+            self.position_to([p[0], p[1], top], run, out)?;
+            self.position_to([start[0], start[1], top], run, out)?;
         } else {
-            self.probe_line([start[0], start[1], p[2]], f, run, out);
+            self.position_to([start[0], start[1], p[2]], run, out)?;
         }
-        self.probe_line([start[0], start[1], h], f, run, out);
+        self.position_to([start[0], start[1], h], run, out)
+    }
+
+    /// A positioning move to `to` at the positioning feed. The stylus must not meet the part
+    /// on the way (it may come to rest touching it: the probing move then reports that).
+    pub(super) fn position_to(
+        &mut self,
+        to: P3,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let xyz = |p: &Pose| [p[AxisLetter::X], p[AxisLetter::Y], p[AxisLetter::Z]];
+        let from = xyz(&self.cyc.xf.map_point(&self.pos));
+        let end = xyz(&self.cyc.xf.map_point(&self.pose_at(to)));
+        let radius = self.probe.data.radius;
+        let blank = self.blank;
+        if from != end
+            && let Some(p) = self.probe.probe.as_mut()
+            && let Some(hit) = p.touch(from, end, radius, blank.as_ref())
+        {
+            let short = (0..3)
+                .map(|i| (end[i] - hit[i]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            if short > 1e-9 {
+                return Err(perr(ProbeError::Collision {
+                    cycle: run.cycle,
+                    point: run.point,
+                }));
+            }
+        }
+        let f = self.positioning();
+        self.probe_line(to, f, run, out);
+        Ok(())
     }
 
     /// Raises the probe to the clearance height `clear` (when below it).
-    pub(super) fn up_to(&mut self, clear: f64, run: Run, out: &mut VecDeque<Op>) {
+    pub(super) fn up_to(
+        &mut self,
+        clear: f64,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
         let p = self.plane_pos();
         if p[2] < clear {
-            let f = self.positioning();
-            self.probe_line([p[0], p[1], clear], f, run, out);
+            self.position_to([p[0], p[1], clear], run, out)?;
         }
+        Ok(())
     }
 
     /// Probes from where the probe stands along the unit direction `dir` (working-plane
@@ -455,19 +495,9 @@ impl Machine {
                     }
                 }
                 // the probe moves to the pre-position in a straight line at rapid traverse
-                let from = self.pos;
-                if from != target {
-                    out.push_back(Op {
-                        kind: OpKind::Line {
-                            from,
-                            to: target,
-                            feed: self.positioning(),
-                        },
-                        loc: run.loc,
-                    });
-                }
-                self.pos = target;
                 let (a, b, n) = self.plane.axes();
+                self.position_to([target[a], target[b], target[n]], run, out)?;
+                self.pos = target;
                 let dir = [dir_xyz[a.index()], dir_xyz[b.index()], dir_xyz[n.index()]];
                 let t = self.probe_from_here(dir, run, out)?;
                 let tp = self.pose_at(t);
