@@ -253,8 +253,13 @@ fn run_pipeline(path: &Path, config: &MachineConfig) -> PipelineRun {
         let sample = match planner.next_step() {
             Some(Step::Sample(s)) => s,
             Some(Step::Event(op)) => {
-                if let OpKind::Tcpm { on, .. } = op.kind {
-                    kin.set_tcpm(on);
+                match &op.kind {
+                    OpKind::Tcpm { on, .. } => kin.set_tcpm(*on),
+                    // A thread pass is geared to the measured spindle angle by the servo loop
+                    // (its profile is checked by the test run and tests/lathe_threads.rs): the
+                    // planner stops at its start and goes on from its end.
+                    OpKind::SpindleSync { to, .. } => kin.to_machine(to, &mut commanded),
+                    _ => {}
                 }
                 continue;
             }

@@ -17,6 +17,8 @@ const OFF: [f64; 3] = [3.2, -1.7, -0.25];
 const TURN: f64 = 1.5;
 /// Lengths within 1 µm (the figure asked for), angles within 0.001°.
 const MM: f64 = 1e-3;
+/// The stylus ball's radius (`[probe] radius` of the machine file).
+const BALL: f64 = 2.0;
 const DEG: f64 = 1e-3;
 
 fn machine() -> MachineConfig {
@@ -532,4 +534,61 @@ L X+10 Y-5 Z+1 FMAX
     let (table, active) = it.presets();
     assert_eq!(active, Some(2));
     assert!(table.and_then(|t| t.row(2)).is_some());
+}
+
+#[test]
+fn cycles_417_and_419_set_the_datum_one_axis_at_a_time() {
+    // As a CAM post writes them: the top as Z0, the left edge as X-40, the back edge as Y+30.
+    let body = "TCH PROBE 417 DATUM IN TS AXIS ~
+  Q263=-40 ;1ST POINT 1ST AXIS ~
+  Q264=+25 ;1ST POINT 2ND AXIS ~
+  Q294=+0 ;1ST POINT 3RD AXIS ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q333=+0 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER
+TCH PROBE 419 DATUM IN ONE AXIS ~
+  Q263=-55 ;1ST POINT 1ST AXIS ~
+  Q264=+0 ;1ST POINT 2ND AXIS ~
+  Q261=-4 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q272=+1 ;MEASURING AXIS ~
+  Q267=+1 ;TRAVERSE DIRECTION ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q333=-40 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER
+TCH PROBE 419 DATUM IN ONE AXIS ~
+  Q263=-22.5 ;1ST POINT 1ST AXIS ~
+  Q264=+45 ;1ST POINT 2ND AXIS ~
+  Q261=-4 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q272=+2 ;MEASURING AXIS ~
+  Q267=-1 ;TRAVERSE DIRECTION ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q333=+30 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER
+";
+    let (it, _) = run_body("probe417_419.h", body);
+    let (s, c) = TURN.to_radians().sin_cos();
+    // 417: the top lies OFF[2] below its nominal Z0
+    close("Q160", it.q(160), OFF[2], MM);
+    // 419 in X at program Y0: the left edge, part points (-50, t)
+    let t = (50.0 * s - OFF[1]) / c;
+    // A ball probing a face turned by TURN touches it off its axis: the coordinate reported
+    // (ball centre plus its radius along the probing direction) falls short of the face
+    // where the probing line crosses it by r·(1/cos − 1), as on a real machine.
+    let slant = BALL * (1.0 / c - 1.0);
+    let x1 = OFF[0] - 50.0 * c - t * s - slant;
+    // 419 in Y at X-22.5 of the shifted datum: the back edge, part points (t, 40)
+    let x_probe = -22.5 + x1 + 40.0;
+    let t = (x_probe - OFF[0] + 40.0 * s) / c;
+    let y1 = OFF[1] + t * s + 40.0 * c + slant;
+    let (xyz, rot) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0] + x1 + 40.0, 1e-9);
+    close("preset Y", xyz[1], ORIGIN[1] + y1 - 30.0, 1e-9);
+    close("preset Z", xyz[2], ORIGIN[2] + OFF[2], 1e-9);
+    close("preset ROT", rot, 0.0, 1e-12);
 }

@@ -34,8 +34,14 @@
 //!   400, 412/413 and 410/411 but write no preset; they add the deviations from nominal:
 //!   Q161/Q162 of the centre, Q163 of the diameter, Q164/Q165 of the sides. Their
 //!   tolerance limits and program stop (Q275 …, Q309) are not checked yet.
-//! - **427**: one coordinate at Q263/Q264 (height Q261) along axis Q272 (1, 2, 3 = tool
-//!   axis) in direction Q267; Q160 the coordinate.
+//! - **417** (preset in the tool axis): the probe stands over Q263/Q264 at the clearance
+//!   above the nominal surface height Q294 and probes downward; the height touched is Q160
+//!   and becomes the tool-axis datum Q333.
+//! - **419** (preset in one axis) and **427** (measure a coordinate): one touch point at
+//!   Q263/Q264 (height Q261) along axis Q272 (1 reference, 2 minor, 3 tool axis) in
+//!   direction Q267 (+1/−1), approached from the clearance before it; 419 makes the
+//!   coordinate touched the datum Q333 of that axis (the other axes keep theirs), 427 writes
+//!   it to Q160.
 //! - **431**: three points (Q263/Q264/Q294, Q265/Q266/Q295, Q296/Q297/Q298) probed downward
 //!   along the tool axis; Q173 … Q175 the heights measured, Q158/Q159 the projection angles
 //!   about the reference and the minor axis, Q170 … Q172 the spatial angles A, B, C of the
@@ -167,6 +173,8 @@ impl Machine {
                 let d = renamed(def, &[centre[0], centre[1], (282, 323), (283, 324)]);
                 self.cycle41x_rect(&d, def.number == 423, false, run, out)
             }
+            417 => self.cycle417(def, run, out),
+            419 => self.cycle419(def, run, out),
             427 => self.cycle427(def, run, out),
             431 => self.cycle431(def, run, out),
             n => Err(perr(ProbeError::Unknown(n))),
@@ -493,14 +501,65 @@ impl Machine {
         )
     }
 
-    /// 427: one coordinate, probed at Q263/Q264 (measuring height Q261) along axis Q272
-    /// (1 reference, 2 minor, 3 tool axis) in direction Q267; Q160 the coordinate measured.
+    /// 427: one coordinate (see [`Self::one_coordinate`]); Q160 the coordinate measured.
     fn cycle427(
         &mut self,
         def: &CycleDef,
         run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<(), ExecError> {
+        let (k, t) = self.one_coordinate(def, run, out)?;
+        self.set_q(160, t[k] / self.unit);
+        Ok(())
+    }
+
+    /// 419: one coordinate (see [`Self::one_coordinate`]) becomes the datum Q333 of its axis;
+    /// the other axes keep theirs.
+    fn cycle419(
+        &mut self,
+        def: &CycleDef,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let (k, t) = self.one_coordinate(def, run, out)?;
+        let mut measured = [None; 3];
+        measured[k] = Some(t[k]);
+        let mut new = [0.0; 3];
+        new[k] = self.opt(def, 333, 0.0);
+        self.set_datum(def, measured, new, out, run.loc)
+    }
+
+    /// 417: the surface under Q263/Q264 (nominal height Q294), probed downward along the tool
+    /// axis from the clearance above it, becomes the tool-axis datum Q333; Q160 the height
+    /// measured.
+    fn cycle417(
+        &mut self,
+        def: &CycleDef,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let p = [self.need(def, 263)?, self.need(def, 264)?];
+        let nominal = self.need(def, 294)?;
+        let clear = self.need(def, 260)?;
+        let lead = self.lead(def);
+        self.go_to_point(p, nominal + lead, clear, true, run, out)?;
+        let t = self.touch_surface([0.0, 0.0, -1.0], run, out)?;
+        self.up_to(clear, run, out)?;
+        self.set_q(160, t[2] / self.unit);
+        let new = [0.0, 0.0, self.opt(def, 333, 0.0)];
+        self.set_datum(def, [None, None, Some(t[2])], new, out, run.loc)
+    }
+
+    /// The single touch point of 419 and 427: at Q263/Q264 (measuring height Q261) along
+    /// axis Q272 (1 reference, 2 minor, 3 tool axis) in direction Q267 (+1/−1), started the
+    /// clearance before the point and ended at the clearance height Q260. Returns the axis
+    /// index and the surface point touched.
+    fn one_coordinate(
+        &mut self,
+        def: &CycleDef,
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(usize, P3), ExecError> {
         let p = [self.need(def, 263)?, self.need(def, 264)?];
         let h = self.need(def, 261)?;
         let clear = self.need(def, 260)?;
@@ -532,8 +591,7 @@ impl Machine {
         self.go_to_point([start[0], start[1]], start[2], clear, true, run, out)?;
         let t = self.touch_surface(dir, run, out)?;
         self.up_to(clear, run, out)?;
-        self.set_q(160, t[k] / self.unit);
-        Ok(())
+        Ok((k, t))
     }
 
     fn cycle431(
