@@ -8,7 +8,8 @@ use klar::config::MachineConfig;
 use klar::runtime::{OperatorStop, Run, RunFailure, RunOptions, RunReport};
 use std::io::IsTerminal;
 use std::path::Path;
-use std::time::{Duration, Instant};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, Ordering};
+use std::time::Duration;
 
 /// Wall time between two redraws of the bar.
 const REDRAW: Duration = Duration::from_millis(100);
@@ -40,30 +41,39 @@ pub fn run_with_progress(
     } else {
         ProgressBar::hidden()
     };
-    let mut last = Instant::now();
-    let mut steps = 0u32;
-    let ended = loop {
-        match run.step() {
-            Ok(true) => {}
-            Ok(false) => break None,
-            Err(e) => break Some(e),
+    let slot = Slot::default();
+    let ended = std::thread::scope(|scope| {
+        // The bar is drawn by a thread of its own from the slot the loop fills: the loop
+        // neither formats nor writes to the terminal, nor waits for the one that does.
+        if show {
+            let (bar, slot) = (&bar, &slot);
+            let drawn = std::thread::Builder::new()
+                .name("klar-progress".into())
+                .spawn_scoped(scope, move || draw(bar, slot, scale, lines));
+            if let Err(e) = drawn {
+                tracing::warn!("no progress bar: {e}");
+            }
         }
-        steps = steps.wrapping_add(1);
-        if show && steps.is_multiple_of(64) && last.elapsed() >= REDRAW {
-            last = Instant::now();
-            let s = run.status();
-            bar.set_position(scale.position(s.t, s.line));
-            bar.set_message(scale.message(s.t, s.line, lines));
-        }
-    };
+        let ended = loop {
+            let stepped = run.step();
+            slot.publish(run.line(), run.time());
+            match stepped {
+                Ok(true) => {}
+                Ok(false) => break None,
+                Err(e) => break Some(e),
+            }
+        };
+        slot.done.store(true, Ordering::Release);
+        ended
+    });
     if show {
-        let s = run.status();
+        let (t, line) = (run.time(), run.line());
         bar.set_position(if ended.is_none() {
             scale.len()
         } else {
-            scale.position(s.t, s.line)
+            scale.position(t, line)
         });
-        bar.set_message(scale.message(s.t, s.line, lines));
+        bar.set_message(scale.message(t, line, lines));
         bar.abandon();
     }
     run.finish(ended)
@@ -110,6 +120,37 @@ impl Scale {
             }
             Scale::Lines(_) => format!("line {line}/{lines}  machine time {t:.3} s"),
         }
+    }
+}
+
+/// Where the servo loop leaves its progress for the thread that draws the bar: atomics,
+/// written every cycle and read every redraw, neither side ever waiting for the other (a
+/// line and a time from neighbouring cycles may be shown together, which a bar does not
+/// mind).
+#[derive(Default)]
+struct Slot {
+    line: AtomicU32,
+    /// Machine time, s, as the bits of an f64.
+    t: AtomicU64,
+    /// The run has ended.
+    done: AtomicBool,
+}
+
+impl Slot {
+    fn publish(&self, line: u32, t: f64) {
+        self.line.store(line, Ordering::Relaxed);
+        self.t.store(t.to_bits(), Ordering::Relaxed);
+    }
+}
+
+/// Redraws the bar from the slot every [`REDRAW`] until the run ends.
+fn draw(bar: &ProgressBar, slot: &Slot, scale: Scale, lines: u64) {
+    while !slot.done.load(Ordering::Acquire) {
+        let line = slot.line.load(Ordering::Relaxed);
+        let t = f64::from_bits(slot.t.load(Ordering::Relaxed));
+        bar.set_position(scale.position(t, line));
+        bar.set_message(scale.message(t, line, lines));
+        std::thread::sleep(REDRAW);
     }
 }
 

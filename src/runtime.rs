@@ -734,6 +734,17 @@ impl<'a, 'w> Run<'a, 'w> {
         }
     }
 
+    /// Program line of the motion being executed (1-based; 0 before the first), read
+    /// without the allocations of [`Run::status`].
+    pub fn line(&self) -> u32 {
+        self.line
+    }
+
+    /// Machine time of the last cycle, s.
+    pub fn time(&self) -> f64 {
+        self.t
+    }
+
     /// Where each axis stood when the run started, and whether it is referenced.
     pub fn start_positions(&self) -> &[AxisStart] {
         &self.report.start

@@ -473,8 +473,20 @@ impl MachineLoop {
     }
 
     fn publish(&mut self) {
+        self.publish_with(true);
+    }
+
+    /// Publishes the snapshot; between servo cycles (`wait` false) it never waits for a
+    /// reader of the latest-snapshot slot: when the slot is being read, this snapshot goes
+    /// only to the subscribers and a later one fills the slot.
+    fn publish_with(&mut self, wait: bool) {
         self.snap.seq += 1;
-        if let Ok(mut l) = self.latest.lock() {
+        let slot = if wait {
+            self.latest.lock().ok()
+        } else {
+            self.latest.try_lock().ok()
+        };
+        if let Some(mut l) = slot {
             *l = self.snap.clone();
         }
         // No subscriber is not an error: nobody is watching.
@@ -547,7 +559,7 @@ impl MachineLoop {
                 if status.held {
                     self.snap.state = MachineState::Held;
                 }
-                self.publish();
+                self.publish_with(done);
                 last_publish = Instant::now();
             }
             // At rest the drives hold the commanded position; after a fault the measured
