@@ -307,3 +307,42 @@ fn a_stop_requested_inside_a_pass_takes_effect_at_its_end() {
     assert!((z_end + 30.0).abs() < 1e-9, "stopped at Z {z_end}");
     assert!((x_end - 9.8).abs() < 1e-9, "stopped at X {x_end}");
 }
+
+#[test]
+fn check_refuses_threading_on_a_canopen_spindle_until_its_position_is_read() {
+    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/canopen-sim.toml");
+    let machine = MachineConfig::load(&file).expect("machine loads");
+    let report = test_run(&program("lathe/thread_g33.nc"), &machine);
+    let first = report.errors.first().expect("refused");
+    assert_eq!(first.block, Some(21), "{first}");
+    assert!(
+        first.message.contains("position (0x6064) is not read"),
+        "{first}"
+    );
+}
+
+#[test]
+fn bad_g33_words_are_diagnostics_at_their_word() {
+    let machine = MachineConfig::builtin_lathe();
+    for (block, want_col, want) in [
+        ("N4 G33 Z-40", 4, "G33 needs the thread pitch F"),
+        ("N4 G33 Z-40 F1.5 H2", 18, "expected 0 (pitch along Z)"),
+        ("N4 G33 Z-40 F1.5 E0.1", 18, "variable pitch"),
+        ("N4 G33 Z-40 F-1", 13, "must be positive"),
+        ("N4 G33 Z-40 F1.5 B-2", 18, "must be a length"),
+        ("N4 G33 X30 F1.5", 4, "does not move Z"),
+        ("N4 G33 Z-40 F1.5 B30 P20", 4, "longer than the pass"),
+    ] {
+        let text = format!(
+            "%bad.nc\nMACHINING\nN1 T1\nN2 G97 S500 M3\nN3 G0 X20 Z5\n{block}\nN5 M30\nEND\n"
+        );
+        let path = temp_program("bad.nc", &text);
+        let report = test_run(&path, &machine);
+        let first = report
+            .errors
+            .first()
+            .unwrap_or_else(|| panic!("{block}: accepted"));
+        assert_eq!((first.line, first.col), (6, want_col), "{block}: {first}");
+        assert!(first.message.contains(want), "{block}: {first}");
+    }
+}
