@@ -338,67 +338,45 @@ TCH PROBE 1.2 X+60 Y+0 Z-10
     close("Q115 after cycle 1", it.q(115), touch_x, MM);
 }
 
+/// Runs `body` after the prelude on `m` and asserts that the first error is at `line` and
+/// says `says`.
+fn refused_at(m: &MachineConfig, name: &str, body: &str, line: u32, says: &str) {
+    let path = common::temp_program(name, &format!("{PRELUDE}{body}M30\nEND PGM PROBE MM\n"));
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let err = it.find_map(Result::err).expect("refused");
+    assert!(err.message.contains(says), "{name}: {}", err.message);
+    assert_eq!(err.line, line, "{name}: {}", err.message);
+}
+
 #[test]
 fn probing_errors_name_their_cause_at_their_block() {
+    // a machine without a probe
     let mill = MachineConfig::builtin_mill();
-    let path = common::temp_program(
-        "probe_nomachine.h",
-        &format!("{PRELUDE}{C400}M30\nEND PGM PROBE MM\n"),
-    );
-    let mut it = mill.open_program(&path, mill.start_pose()).expect("opens");
-    let err = it.find_map(Result::err).expect("refused without a probe");
-    assert_eq!(err.line, 6);
-    assert!(
-        err.message.contains("needs a touch probe"),
-        "{}",
-        err.message
-    );
-
-    let path = common::temp_program(
-        "probe_missing_q.h",
-        &format!("{PRELUDE}TCH PROBE 412 ~\n  Q322=+0 ~\n  Q262=+24\nM30\nEND PGM PROBE MM\n"),
-    );
+    refused_at(&mill, "probe_nomachine.h", C400, 6, "needs a touch probe");
     let m = machine();
-    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
-    let err = it.find_map(Result::err).expect("refused");
-    assert!(
-        err.message.contains("TCH PROBE 412 needs Q321"),
-        "{}",
-        err.message
+    refused_at(
+        &m,
+        "probe_missing_q.h",
+        "TCH PROBE 412 ~\n  Q322=+0 ~\n  Q262=+24\n",
+        6,
+        "TCH PROBE 412 needs Q321",
     );
-    assert_eq!(err.line, 6);
-
     // a pre-position inside the part: the stylus meets it on the way there
-    let path = common::temp_program(
+    refused_at(
+        &m,
         "probe_collision.h",
-        &format!(
-            "{PRELUDE}TCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
-        ),
+        "TCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\n",
+        7,
+        "touch probe collision",
     );
-    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
-    let err = it.find_map(Result::err).expect("refused");
-    assert!(
-        err.message.contains("touch probe collision"),
-        "{}",
-        err.message
-    );
-    assert_eq!(err.line, 7);
-
     // a probe standing inside the part (moved there by an ordinary block): already in contact
-    let path = common::temp_program(
+    refused_at(
+        &m,
         "probe_inside.h",
-        &format!(
-            "{PRELUDE}L X+0 Y+20 Z-5 FMAX\nTCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\nM30\nEND PGM PROBE MM\n"
-        ),
+        "L X+0 Y+20 Z-5 FMAX\nTCH PROBE 0.0 REF. PLANE Q10 X+\nTCH PROBE 0.1 X+0 Y+20 Z-5\n",
+        8,
+        "stylus already in contact",
     );
-    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
-    let err = it.find_map(Result::err).expect("refused");
-    assert!(
-        err.message.contains("stylus already in contact"),
-        "{}",
-        err.message
-    );
-    assert_eq!(err.line, 8);
 }
 
 #[test]

@@ -374,9 +374,13 @@ fn wrong_register_map_is_refused_by_the_device_and_reported() {
     let mut vfd = ModbusVfd::open(&config(&peer.port, VfdPreset::Generic { registers }))
         .expect("open the VFD backend");
     let seen = run_until(&mut vfd, |fb| fb.fault.is_some());
+    // The device answers with exception 02: its own refusal, not a lost line.
     assert_eq!(
         seen.last().unwrap().fault,
-        Some(AxisFault::CommunicationLost)
+        Some(AxisFault::DeviceException {
+            code: 2,
+            meaning: "illegal data address"
+        })
     );
     let err = vfd.snapshot().last_error.unwrap_or_default();
     assert!(err.contains("illegal data address"), "{err}");
