@@ -16,6 +16,7 @@ pub(crate) mod exec;
 pub mod expr;
 pub(crate) mod facemill;
 pub mod flow;
+pub(crate) mod grooving;
 pub(crate) mod lateral;
 pub(crate) mod lathe;
 pub mod pattern;
