@@ -20,7 +20,8 @@
 //!
 //! Patterns and cycles live in their own files: G745 and G743 face patterns with G71, G74,
 //! G36 and G791 (`cycles`), G744 and G746 lateral patterns drilling radially (`lateral`),
-//! G793 face contour milling (`facemill`), G810/G820 roughing (`roughing`).
+//! G793 face contour milling (`facemill`), G810/G820 roughing (`roughing`), G860/G866/G870
+//! recessing (`grooving`).
 
 use std::collections::{HashMap, VecDeque};
 
