@@ -245,6 +245,9 @@ struct MachineInfo {
     servo_period: f64,
     /// The preset programs start from (the machine file's `active_preset`), in words.
     preset: String,
+    /// The machine is a lathe (`kinematics = "lathe"`): its X runs in radius and is shown as
+    /// a diameter.
+    lathe: bool,
 }
 
 async fn machine(State(app): State<App>) -> Json<MachineInfo> {
@@ -258,6 +261,7 @@ async fn machine(State(app): State<App>) -> Json<MachineInfo> {
             Ok(p) => p.to_string(),
             Err(e) => e,
         },
+        lathe: m.kinematics == crate::config::KinematicsConfig::Lathe,
     })
 }
 
