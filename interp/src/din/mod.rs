@@ -14,6 +14,7 @@ pub(crate) mod control;
 pub(crate) mod cycles;
 pub(crate) mod exec;
 pub mod expr;
+pub(crate) mod external;
 pub(crate) mod facemill;
 pub mod flow;
 pub(crate) mod grooving;
