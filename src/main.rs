@@ -445,8 +445,14 @@ fn cmd_test_run(
         report.motion_ops,
         report.planned_time
     );
+    let lathe = config.kinematics == klar::config::KinematicsConfig::Lathe;
     for (l, lo, hi) in &report.envelope {
-        say!("  {l}: {lo:.4} .. {hi:.4}");
+        if lathe && *l == klar_interp::AxisLetter::X {
+            // a lathe's X runs in radius; the operator reads it as a diameter
+            say!("  X (diameter): {:.4} .. {:.4}", lo * 2.0, hi * 2.0);
+        } else {
+            say!("  {l}: {lo:.4} .. {hi:.4}");
+        }
     }
     if let Ok(preset) = config.active_preset() {
         say!("  preset at start: {preset}");

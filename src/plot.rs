@@ -322,6 +322,7 @@ struct Paths<'a> {
 }
 
 /// A stroke projected to 2D, with its style.
+#[derive(Clone)]
 struct Flat {
     style: PathStyle,
     points: Vec<(f64, f64)>,
@@ -351,7 +352,7 @@ fn draw<DB: DrawingBackend>(
     let (lo, hi) = extent(paths.contour);
     let lathe = hi[1] - lo[1] < 1e-9 && hi[2] - lo[2] > 1e-9;
     let (plane_of, plane_name, labels): (Projection, _, _) = if lathe {
-        (|p| (p[2], p[0]), "Z/X", ("Z [mm]", "X [mm]"))
+        (|p| (p[2], p[0]), "Z/X", ("Z [mm]", "X ⌀ [mm]"))
     } else {
         (|p| (p[0], p[1]), "X/Y", ("X [mm]", "Y [mm]"))
     };
@@ -381,12 +382,14 @@ fn draw<DB: DrawingBackend>(
         &flat(&plane_of),
         &format!("{title}: working plane {plane_name}"),
         labels,
+        lathe,
     )?;
     panel(
         &right,
         &flat(&isometric),
         &format!("{title}: isometric"),
         ("", ""),
+        false,
     )?;
     if let Some(p) = profile {
         profile::draw(&bottom, p)?;
@@ -438,12 +441,31 @@ fn panel<DB: DrawingBackend>(
     paths: &[Flat],
     caption: &str,
     labels: (&str, &str),
+    lathe: bool,
 ) -> Result<(), PlotError> {
     let err = |e: &dyn std::fmt::Display| PlotError::Draw(e.to_string());
     let (w, h) = area.dim_in_pixel();
     // Plot area is the panel less the label areas (60 px left, 40 px bottom, caption ~40 px).
     let aspect = (w as f64 - 80.0).max(1.0) / (h as f64 - 90.0).max(1.0);
-    let ((x0, x1), (y0, y1)) = bounds(paths, aspect);
+    // A lathe's view frames the cutting moves (when there are any), so a far tool change
+    // position does not shrink the part into a corner; rapids beyond it are clipped.
+    let cutting: Vec<Flat> = paths
+        .iter()
+        .filter(|f| f.style != PathStyle::Rapid)
+        .cloned()
+        .collect();
+    let framed = if lathe && !cutting.is_empty() {
+        &cutting[..]
+    } else {
+        paths
+    };
+    let ((x0, x1), (y0, y1)) = bounds(framed, aspect);
+    // the lathe's X runs in radius: its ticks read as diameters
+    let tick = move |v: &f64| {
+        let v = if lathe { v * 2.0 } else { *v };
+        let t = format!("{v:.3}");
+        t.trim_end_matches('0').trim_end_matches('.').to_string()
+    };
     let mut chart = ChartBuilder::on(area)
         .caption(caption, ("sans-serif", 20))
         .margin(10)
@@ -455,6 +477,7 @@ fn panel<DB: DrawingBackend>(
         .configure_mesh()
         .x_desc(labels.0)
         .y_desc(labels.1)
+        .y_label_formatter(&tick)
         .label_style(("sans-serif", 14))
         .light_line_style(WHITE.mix(0.0))
         .draw()

@@ -250,3 +250,12 @@ fn serve_without_a_programs_folder_says_so() {
         "{err}"
     );
 }
+
+#[test]
+fn a_lathe_check_reports_x_as_a_diameter() {
+    // the recess floor Ø30 is the smallest X; the built-in tool change point is X200
+    let (code, out, err) = klar(&["check", "programs/lathe/groove_g866_g870.nc"]);
+    assert_eq!(code, 0, "{err}");
+    let all = format!("{out}{err}");
+    assert!(all.contains("X (diameter): 30.0000 .. 200.0000"), "{all}");
+}

@@ -277,3 +277,24 @@ fn broken_programs_give_errors_not_pictures() {
         );
     }
 }
+
+#[test]
+fn a_lathe_plot_reads_x_as_a_diameter_and_frames_the_cuts() {
+    let dir = scratch("lathe");
+    let prog = Path::new(env!("CARGO_MANIFEST_DIR")).join("programs/lathe/groove_g860.nc");
+    let svg = dir.join("g860.svg");
+    plot_program(&prog, start(), &svg).unwrap();
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.contains("X ⌀ [mm]"), "no diameter label");
+    // the cuts span Ø40..Ø54 and Z-31..-20: framed on them, the ticks lie near that
+    // range (Ø40 appears as a tick); framed on the tool change point Ø200/Z200 too, the
+    // working plane's ticks would run in steps of tens up to about 200
+    let ticks: Vec<f64> = text
+        .split('>')
+        .filter_map(|t| t.split('<').next())
+        .filter_map(|t| t.trim().parse::<f64>().ok())
+        .collect();
+    assert!(ticks.contains(&40.0) && ticks.contains(&52.0), "{ticks:?}");
+    assert!(!ticks.contains(&400.0), "{ticks:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -276,6 +276,20 @@ fn the_machine_api_names_the_preset_programs_start_from() {
     let (_rt2, addr2) = start(options(&dir, None));
     let (_, body) = request(addr2, "GET", "/api/machine", "", "");
     assert_eq!(json(&body)["preset"], "none (machine datum)");
+    assert_eq!(json(&body)["lathe"], false);
+}
+
+#[test]
+fn the_machine_api_says_when_the_machine_is_a_lathe() {
+    let dir = programs_dir("lathe");
+    let machine = MachineConfig::builtin_lathe();
+    let (_rt, addr) = start(ServeOptions {
+        machine,
+        ..options(&dir, None)
+    });
+    let (code, body) = request(addr, "GET", "/api/machine", "", "");
+    assert_eq!(code, 200, "{body}");
+    assert_eq!(json(&body)["lathe"], true);
 }
 
 // ---- manual operation, programs and honest state -------------------------------------------

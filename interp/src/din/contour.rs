@@ -15,6 +15,7 @@
 use std::collections::VecDeque;
 
 use super::block::{DinValue, DinWord};
+use super::grooving::{self, Recess};
 use super::lathe::{Group, Lathe, err_at, groups, num};
 use super::unknown::{self, LineSpec};
 use crate::diag::ProgramError;
@@ -135,6 +136,8 @@ pub(crate) struct Contour {
     corner_block: Option<u64>,
     /// A line whose end waits for the next element.
     pending: Option<Pending>,
+    /// The G22 recesses with their block numbers.
+    recesses: Vec<(Option<u64>, Recess)>,
 }
 
 impl Contour {
@@ -149,6 +152,7 @@ impl Contour {
             corner: None,
             corner_block: None,
             pending: None,
+            recesses: Vec::new(),
         }
     }
 
@@ -277,6 +281,10 @@ impl Contour {
                     c
                 }
                 None if g.words.is_empty() => continue,
+                Some(22) => {
+                    self.recess(g, number)?;
+                    continue;
+                }
                 None => self.pen.motion.ok_or((
                     None,
                     ProgramError::Missing("contour element without G0, G1, G2, G3, G12 or G13"),
@@ -318,6 +326,71 @@ impl Contour {
             self.corner_block = number;
         }
         Ok(())
+    }
+
+    /// G22: splits the line before it around the recess (see `grooving`).
+    fn recess(&mut self, g: &Group<'_>, number: Option<u64>) -> Result<(), ExecError> {
+        let here = g.g_word.map(|w| w.pos as u32);
+        if self.corner.is_some() {
+            return Err((
+                here,
+                ProgramError::NotSupported("G22 on an element with a BR transition".into()),
+            ));
+        }
+        let Some(Element {
+            number: line_no,
+            kind: OpKind::Line { from, to, feed },
+        }) = self.elements.last().cloned()
+        else {
+            return Err((
+                here,
+                ProgramError::Geometry(
+                    "G22 needs an axis-parallel straight element just before it".into(),
+                ),
+            ));
+        };
+        let zx = |p: &Pose| [p[AxisLetter::Z], p[AxisLetter::X]];
+        let (recess, pts) = grooving::g22(g, zx(&from), zx(&to))?;
+        self.elements.pop();
+        for (i, pair) in pts.windows(2).enumerate() {
+            let (Some(a), Some(b)) = (pair.first(), pair.get(1)) else {
+                continue;
+            };
+            if (a[0] - b[0]).hypot(a[1] - b[1]) < 1e-9 {
+                continue;
+            }
+            let mut f = from;
+            f[AxisLetter::Z] = a[0];
+            f[AxisLetter::X] = a[1];
+            let mut t = from;
+            t[AxisLetter::Z] = b[0];
+            t[AxisLetter::X] = b[1];
+            self.elements.push(Element {
+                // the first and last piece are the reference line's
+                number: if i == 0 || i == 4 { line_no } else { number },
+                kind: OpKind::Line {
+                    from: f,
+                    to: t,
+                    feed,
+                },
+            });
+        }
+        self.recesses.push((number, recess));
+        Ok(())
+    }
+
+    /// The G22 recess of block `ns` (the last one without NS).
+    pub fn recess_of(&self, ns: Option<u64>) -> Result<Recess, ProgramError> {
+        let found = match ns {
+            None => self.recesses.last(),
+            Some(n) => self.recesses.iter().rev().find(|(b, _)| *b == Some(n)),
+        };
+        found.map(|(_, r)| *r).ok_or_else(|| match ns {
+            Some(n) => ProgramError::OutOfRange(format!("NS{n}: no G22 recess in block N{n}")),
+            None => ProgramError::Missing(
+                "the recessing cycle needs a G22 recess in the FINISHED PART contour",
+            ),
+        })
     }
 
     fn element(

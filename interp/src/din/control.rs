@@ -92,6 +92,11 @@ impl Control {
         }
     }
 
+    /// Number of active subprogram calls.
+    pub fn depth(&self) -> usize {
+        self.calls.len()
+    }
+
     /// The variables.
     pub fn vars(&self) -> &Vars {
         &self.vars
@@ -565,9 +570,14 @@ impl DinProgram {
         }
         self.budget(pos)?;
         let ret = self.reader.next_start();
+        let spot = self.reader.position(pos);
         let body = match self.control.subs.get(name) {
+            _ if self.in_external() => self.enter_external(name, spot)?,
             Some(b) => *b,
-            None => self.find_subprogram(name, ret, pos)?,
+            None => match self.find_subprogram(name, ret, pos) {
+                Ok(b) => b,
+                Err(_) => self.enter_external(name, spot)?,
+            },
         };
         self.control.calls.push(Frame {
             name: name.to_string(),
@@ -627,6 +637,7 @@ impl DinProgram {
         }
         self.control.calls.pop();
         self.control.vars.pop_frame();
+        self.leave_external(self.control.calls.len());
         self.section = frame.section;
         self.seek_to(frame.ret, at)
     }

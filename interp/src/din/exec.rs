@@ -20,7 +20,8 @@
 //!
 //! Patterns and cycles live in their own files: G745 and G743 face patterns with G71, G74,
 //! G36 and G791 (`cycles`), G744 and G746 lateral patterns drilling radially (`lateral`),
-//! G793 face contour milling (`facemill`), G810/G820 roughing (`roughing`).
+//! G793 face contour milling (`facemill`), G810/G820 roughing (`roughing`), G860/G866/G870
+//! recessing (`grooving`).
 
 use std::collections::{HashMap, VecDeque};
 
@@ -28,6 +29,7 @@ use super::block::DinWord;
 use super::contour::Contour;
 use super::cycles::{self, FacePattern};
 use super::facemill::{self, FaceContour};
+use super::grooving;
 use super::lateral::{self, LateralPattern};
 use super::lathe::{FeedUnit, Group, Lathe, TOOL_CHANGE_POINT, err_at, groups, num};
 use super::roughing::{self, Bar};
@@ -631,6 +633,9 @@ impl DinExec {
                 let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
                 roughing::rough(l, &segs, self.blank, &p, loc, out).map_err(|e| (gpos, e))?;
             }
+            Some(code @ (860 | 866 | 870)) => {
+                self.recessing(g, code, loc, out)?;
+            }
             Some(890) => {
                 let block_of = |addr: &str| -> Result<Option<u64>, ExecError> {
                     match g.get(addr) {
@@ -651,7 +656,8 @@ impl DinExec {
             Some(other) => {
                 let name = match other {
                     792 | 794 | 797 | 798 => Some("contour milling cycles other than G793"),
-                    830 | 860 => Some("contour-parallel roughing and recessing cycles"),
+                    830 => Some("contour-parallel roughing G830"),
+                    869 => Some("recess turning G869"),
                     31 | 72 | 73 => Some("threading, boring and tapping cycles"),
                     _ => None,
                 };
@@ -668,6 +674,37 @@ impl DinExec {
             }
         }
         Ok(())
+    }
+
+    /// G860 (contour area), G866/G870 (G22 recess): see `grooving`.
+    fn recessing(
+        &mut self,
+        g: &Group<'_>,
+        code: u32,
+        loc: SourceLoc,
+        out: &mut VecDeque<Op>,
+    ) -> Result<(), ExecError> {
+        let gpos = g.g_word.map(|w| w.pos as u32);
+        let block_of = |addr: &str| -> Result<Option<u64>, ExecError> {
+            match g.get(addr) {
+                None => Ok(None),
+                Some(w) => whole(w, addr).map(|n| Some(u64::from(n))),
+            }
+        };
+        let l = &mut self.lathe;
+        if code == 860 {
+            Self::check_words(g, &["NS", "NE", "P", "I", "K", "Q", "E", "F"], "G860")?;
+            let (ns, ne) = (block_of("NS")?, block_of("NE")?);
+            let a = grooving::area_params(l, g)?;
+            let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
+            grooving::cut_area(l, &segs, &a, loc, out).map_err(|e| (gpos, e))
+        } else {
+            Self::check_words(g, &["NS", "P", "I", "E", "F"], "G866/G870")?;
+            let ns = block_of("NS")?;
+            let p = grooving::plunge_params(l, g)?;
+            let r = self.contour.recess_of(ns).map_err(|e| (gpos, e))?;
+            grooving::cut_recess(l, &r, &p, loc, out).map_err(|e| (gpos, e))
+        }
     }
 
     fn motion(

@@ -1,7 +1,7 @@
 //! Lathe DIN PLUS programs (CNC PILOT / MANUALplus / smart.Turn, `.nc`): line syntax,
 //! program sections, variables, control structures and local subprograms, the lathe's modal
 //! state, face and lateral hole patterns with their drilling/milling cycles, the face contour
-//! cycle G793, the FINISHED PART contour with its finishing and roughing cycles, and the
+//! cycle G793, the FINISHED PART contour with its finishing, roughing and recessing cycles, and the
 //! LATERAL_Y / SURFACE_Y working plane.
 //!
 //! Ops of lathe programs carry X as a **radius**: the interpreter halves the programmed
@@ -14,8 +14,10 @@ pub(crate) mod control;
 pub(crate) mod cycles;
 pub(crate) mod exec;
 pub mod expr;
+pub(crate) mod external;
 pub(crate) mod facemill;
 pub mod flow;
+pub(crate) mod grooving;
 pub(crate) mod lateral;
 pub(crate) mod lathe;
 pub mod pattern;

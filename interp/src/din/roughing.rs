@@ -123,7 +123,8 @@ pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>, code: u32) -> Result<Roug
 }
 
 impl Seg {
-    fn shifted(self, d: [f64; 2]) -> Seg {
+    /// The element moved by `d` (z, x radius).
+    pub(crate) fn shifted(self, d: [f64; 2]) -> Seg {
         let m = |p: [f64; 2]| [p[0] + d[0], p[1] + d[1]];
         match self {
             Seg::Line { a, b } => Seg::Line { a: m(a), b: m(b) },
@@ -142,7 +143,7 @@ impl Seg {
     }
 
     /// Points along the element (ends included) for its extent.
-    fn samples(&self) -> Vec<[f64; 2]> {
+    pub(crate) fn samples(&self) -> Vec<[f64; 2]> {
         match *self {
             Seg::Line { a, b } => vec![a, b],
             Seg::Arc {
@@ -161,7 +162,7 @@ impl Seg {
     }
 
     /// Where the element crosses the line "coordinate `k` = `v`": the other coordinate.
-    fn crossings(&self, k: usize, v: f64) -> Vec<f64> {
+    pub(crate) fn crossings(&self, k: usize, v: f64) -> Vec<f64> {
         let o = 1 - k;
         match *self {
             Seg::Line { a, b } => {

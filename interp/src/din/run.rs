@@ -119,6 +119,8 @@ pub(crate) struct DinProgram {
     pub(super) current: BlockStart,
     /// Diagnostics found while reading ahead (skipped branches) in a check run.
     pub(super) deferred: Vec<Diagnostic>,
+    /// The calling files while an external subprogram runs (see `external`).
+    pub(super) outer: Vec<super::external::Outer>,
 }
 
 /// Reads the parameters of a LATERAL_Y / SURFACE_Y section code.
@@ -184,6 +186,7 @@ impl DinProgram {
             control: Control::new(),
             current: BlockStart { offset: 0, line: 1 },
             deferred: Vec::new(),
+            outer: Vec::new(),
         }
     }
 
