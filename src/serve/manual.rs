@@ -338,6 +338,40 @@ mod tests {
     }
 
     #[test]
+    fn a_lathe_jogs_x_as_a_diameter_up_to_the_radius_travel() {
+        // The built-in lathe's X (a radius) travels -20 … 160 and stands at 100.
+        let lathe = MachineConfig::builtin_lathe();
+        let standing = [100.0, 200.0, 0.0, 0.0, 0.0];
+        let op = ManualOp::Jog {
+            axis: "X".into(),
+            distance: -10.0,
+            speed: 5.0,
+        };
+        let (name, text) = program_for(&op, &lathe, &standing).unwrap().unwrap();
+        assert_eq!(name, "jog.nc");
+        assert!(
+            text.contains("\nN1 G94\nN2 G1 Xi-10.0000 F300.0\n"),
+            "{text}"
+        );
+        // Continuous: 60 mm of radius to the end of the travel is a diameter of 120.
+        let op = ManualOp::JogContinuous {
+            axis: "X".into(),
+            direction: 1.0,
+            speed: 5.0,
+        };
+        let (_, text) = program_for(&op, &lathe, &standing).unwrap().unwrap();
+        assert!(text.contains("G1 Xi120.0000 "), "{text}");
+        // Z is not a diameter: its distance is its own.
+        let op = ManualOp::JogContinuous {
+            axis: "Z".into(),
+            direction: -1.0,
+            speed: 5.0,
+        };
+        let (_, text) = program_for(&op, &lathe, &standing).unwrap().unwrap();
+        assert!(text.contains("G1 Zi-600.0000 "), "{text}");
+    }
+
+    #[test]
     fn homing_all_starts_with_the_tool_axis() {
         assert_eq!(homing_order(&mill(), None).unwrap(), vec![2, 0, 1]);
         assert_eq!(homing_order(&mill(), Some("y")).unwrap(), vec![1]);
