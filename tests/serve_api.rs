@@ -623,12 +623,42 @@ fn a_lathe_takes_lathe_din_mdi_and_refuses_milling_programs() {
         .collect();
     let at = |l: &str| s["commanded"][letters.iter().position(|&x| x == l).unwrap()].clone();
     assert_eq!((at("X"), at("Z")), (20.0.into(), 5.0.into()), "{s}");
-    // Jogging a lathe is not offered yet: said, not done.
+    // A jog of X is a diameter: -10 in X moves the X axis (a radius) from 20 to 15.
     let (code, v) = post(
         addr,
         "/api/jog",
-        r#"{"axis": "Z", "distance": 1, "speed": 5}"#,
+        r#"{"axis": "X", "distance": -10, "speed": 5}"#,
     );
-    assert_eq!(code, 422);
-    assert!(v["error"].as_str().unwrap().contains("MDI"), "{v}");
+    assert_eq!(code, 204, "{v}");
+    let s = wait_for(addr, "the X jog's end", &|s| {
+        at_rest(s) && s["manual"] == "jog X -10.000"
+    });
+    let at = |s: &serde_json::Value, l: &str| {
+        s["commanded"][letters.iter().position(|&x| x == l).unwrap()]
+            .as_f64()
+            .unwrap()
+    };
+    assert!((at(&s, "X") - 15.0).abs() < 1e-9, "{s}");
+    assert!((at(&s, "Z") - 5.0).abs() < 1e-9, "{s}");
+    // Z by its own distance.
+    let (code, v) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "Z", "distance": 2.5, "speed": 5}"#,
+    );
+    assert_eq!(code, 204, "{v}");
+    let s = wait_for(addr, "the Z jog's end", &|s| {
+        at_rest(s) && s["manual"] == "jog Z +2.500"
+    });
+    assert!((at(&s, "Z") - 7.5).abs() < 1e-9, "{s}");
+    assert!((at(&s, "X") - 15.0).abs() < 1e-9, "{s}");
+    // The soft limit counts the radius: X travels down to radius -20, so diameter -70 from
+    // radius 15 (to -20) is the most, and -70.2 is refused with the radius it would reach.
+    let (code, v) = post(
+        addr,
+        "/api/jog",
+        r#"{"axis": "X", "distance": -70.2, "speed": 5}"#,
+    );
+    assert_eq!(code, 422, "{v}");
+    assert!(v["error"].as_str().unwrap().contains("-20.100"), "{v}");
 }

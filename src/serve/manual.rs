@@ -169,9 +169,13 @@ pub fn program_for(
             } else {
                 a.travel[0]
             };
-            let distance = end - at;
+            let mut distance = end - at;
             if distance * direction <= 1e-6 {
                 return Err(Refusal::AtLimit(a.letter.to_string()));
+            }
+            if is_lathe(config) && a.letter == AxisLetter::X {
+                // The request's X distance is a diameter (see below).
+                distance *= 2.0;
             }
             (axis, distance, *speed)
         }
@@ -183,7 +187,10 @@ pub fn program_for(
     let (Some(a), Some(&at)) = (config.axes.get(i), standing.get(i)) else {
         return Err(Refusal::NoAxis(axis.clone()));
     };
-    let target = at + distance;
+    // On a lathe, X is jogged as a diameter, as lathe DIN programs write it and as a turning
+    // control shows it: the X axis (a radius) moves by half the distance.
+    let lathe_x = is_lathe(config) && a.letter == AxisLetter::X;
+    let target = at + if lathe_x { distance / 2.0 } else { distance };
     let [min, max] = a.travel;
     // A hair of rounding at the limit itself is allowed: the continuous jog ends there.
     if target < min - 1e-9 || target > max + 1e-9 {
@@ -194,14 +201,20 @@ pub fn program_for(
             max,
         });
     }
+    let feed = speed * 60.0;
     if is_lathe(config) {
-        return Err(Refusal::Unsupported(
-            "jogging a lathe from the dashboard is not supported yet: use MDI".into(),
-        ));
+        // Lathe DIN: G94 (feed in mm/min, not per revolution: no spindle needed) and an
+        // incremental straight line of the one axis (`Xi` a diameter, `Zi`, `Ci`, …). The
+        // tool moves `speed` along the axis: for X that is half the diameter's rate, so the
+        // feed of a diameter move is the axis speed itself.
+        let text = format!(
+            "%jog.nc\nMACHINING\nN1 G94\nN2 G1 {}i{distance:.4} F{feed:.1}\nEND\n",
+            a.letter
+        );
+        return Ok(Some(("jog.nc", text)));
     }
     // Klartext: an incremental straight line of the one axis, feed in units per minute.
     let letter = incremental_address(a.letter);
-    let feed = speed * 60.0;
     let text =
         format!("0 BEGIN PGM JOG MM\n1 L {letter}{distance:+.4} R0 F{feed:.1}\n2 END PGM JOG MM\n");
     Ok(Some(("jog.h", text)))
@@ -322,6 +335,40 @@ mod tests {
             block: "L X+1\nL X+2".into(),
         };
         assert_eq!(program_for(&mdi, &m, &standing), Err(Refusal::BadBlock));
+    }
+
+    #[test]
+    fn a_lathe_jogs_x_as_a_diameter_up_to_the_radius_travel() {
+        // The built-in lathe's X (a radius) travels -20 … 160 and stands at 100.
+        let lathe = MachineConfig::builtin_lathe();
+        let standing = [100.0, 200.0, 0.0, 0.0, 0.0];
+        let op = ManualOp::Jog {
+            axis: "X".into(),
+            distance: -10.0,
+            speed: 5.0,
+        };
+        let (name, text) = program_for(&op, &lathe, &standing).unwrap().unwrap();
+        assert_eq!(name, "jog.nc");
+        assert!(
+            text.contains("\nN1 G94\nN2 G1 Xi-10.0000 F300.0\n"),
+            "{text}"
+        );
+        // Continuous: 60 mm of radius to the end of the travel is a diameter of 120.
+        let op = ManualOp::JogContinuous {
+            axis: "X".into(),
+            direction: 1.0,
+            speed: 5.0,
+        };
+        let (_, text) = program_for(&op, &lathe, &standing).unwrap().unwrap();
+        assert!(text.contains("G1 Xi120.0000 "), "{text}");
+        // Z is not a diameter: its distance is its own.
+        let op = ManualOp::JogContinuous {
+            axis: "Z".into(),
+            direction: -1.0,
+            speed: 5.0,
+        };
+        let (_, text) = program_for(&op, &lathe, &standing).unwrap().unwrap();
+        assert!(text.contains("G1 Zi-600.0000 "), "{text}");
     }
 
     #[test]
