@@ -555,6 +555,7 @@ fn cmd_run(
         if report.realtime {
             say!("underruns:    {}", report.underruns);
             say!("starved:      {} cycles", report.starved);
+            say!("log dropped:  {} records", report.log_dropped);
             if let Some(l) = &report.lateness {
                 say!("lateness:     {l}");
             }

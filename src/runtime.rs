@@ -29,6 +29,7 @@ pub(crate) mod command;
 mod error;
 mod events;
 pub mod guard;
+mod log;
 mod operator;
 mod reader;
 mod settle;
@@ -47,6 +48,7 @@ use command::CommandPath;
 pub use error::RunError;
 use klar_interp::{AxisLetter, SourceLoc};
 use klar_motion::{AxisFault, Planner, Sample, Step};
+use log::{LogQueue, LogRecord};
 pub use operator::{OperatorStop, StopLevel};
 use reader::{Feed, OpChecks, Reader};
 use std::collections::VecDeque;
@@ -90,6 +92,8 @@ pub struct RunReport {
     pub spindle_wait: f64,
     /// True when the run used the wall clock.
     pub realtime: bool,
+    /// Log records of the servo loop dropped because their queue was full.
+    pub log_dropped: u64,
     /// How the run was stopped early by a fault or a request, if it was.
     pub stop: Option<StopReport>,
     /// Set when the spindle's stop at the end of the run could not be confirmed by its
@@ -206,6 +210,11 @@ pub struct Run<'a, 'w> {
     enforce_wall_lateness: bool,
     /// The operator's stop request the run watches, if any.
     operator: Option<OperatorStop>,
+    /// What the loop reports, on its way to the log thread.
+    log: LogQueue,
+    /// An error met during a stop after which the stop went on: logged when the run
+    /// finishes, outside the loop (what it was doing, the error).
+    deferred: Option<(&'static str, RunError)>,
     /// The operator's stop level the run has acted on.
     operator_seen: StopLevel,
     /// A pass geared to the spindle under way (a thread pass).
@@ -230,10 +239,10 @@ impl Run<'_, '_> {
         };
         let limit = self.config.setpoint_lateness_limit();
         if counted > limit && self.stopping.is_none() {
-            tracing::error!(
-                line = self.line,
-                "setpoint underrun: {counted:.4} s late: feed hold"
-            );
+            self.log.send(LogRecord::Underrun {
+                line: self.line,
+                late: counted,
+            });
             let block = self.last_loc.and_then(|l| l.block);
             self.begin_path_stop(
                 StopCause::Underrun {
@@ -273,7 +282,7 @@ impl Run<'_, '_> {
             && let Some(fault) = s.feedback().fault.clone()
         {
             let message = s.describe_fault(&fault);
-            tracing::error!(line = self.line, "spindle fault: {message}: feed hold");
+            self.log.send(LogRecord::SpindleFault { line: self.line });
             self.begin_path_stop(
                 StopCause::Spindle(message.clone()),
                 None,
@@ -538,6 +547,15 @@ impl<'a, 'w> Run<'a, 'w> {
             }
         }
         let lags = io.feedback_lags();
+        let functions = config
+            .m_functions
+            .iter()
+            .filter_map(|m| Some((u32::try_from(m.number).ok()?, m.name.clone())))
+            .collect();
+        let (log, log_error) = LogQueue::start(functions);
+        if let Some(e) = log_error {
+            tracing::warn!("no log thread ({e}): the servo loop's messages are dropped");
+        }
         let reader = match Reader::spawn(ops, checks) {
             Ok(r) => r,
             Err(e) => {
@@ -607,6 +625,8 @@ impl<'a, 'w> Run<'a, 'w> {
             operator: None,
             operator_seen: StopLevel::None,
             sync: None,
+            log,
+            deferred: None,
         };
         // Start-up: the planner fills its look-ahead before the first cycle, waiting for
         // the reader as long as it takes.
@@ -766,6 +786,20 @@ impl<'a, 'w> Run<'a, 'w> {
     /// ahead (reported after the motion before it finished) comes out here too.
     pub fn finish(mut self, error: Option<RunError>) -> Result<RunReport, Box<RunFailure>> {
         self.report.blocks = self.blocks;
+        self.log.close();
+        self.report.log_dropped = self.log.dropped;
+        if let Some((what, e)) = self.deferred.take() {
+            tracing::warn!("{what}: {e}");
+        }
+        if let Some(stop) = &self.stop_report {
+            tracing::warn!("{stop}");
+        }
+        if self.report.log_dropped > 0 {
+            tracing::warn!(
+                "{} log records from the servo loop were dropped (queue full)",
+                self.report.log_dropped
+            );
+        }
         if self.report.starved > 0 {
             tracing::warn!(
                 "the program reader fell behind in {} servo cycles: the path braked for the end \
@@ -821,6 +855,14 @@ impl<'a, 'w> Run<'a, 'w> {
             }
         }
         true
+    }
+
+    /// Keeps an error met during a stop that goes on, for the log when the run finishes
+    /// (the first one: what follows from it adds nothing).
+    fn defer(&mut self, what: &'static str, error: RunError) {
+        if self.deferred.is_none() {
+            self.deferred = Some((what, error));
+        }
     }
 
     /// An error found while reading ahead: the motion of the blocks before it finishes, then

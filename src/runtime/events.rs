@@ -1,7 +1,7 @@
 //! The run's events: non-motion ops as they reach the servo loop (the TCPM switch, program
 //! stops, machine functions); the spindle commands are in `spindle.rs`.
 
-use super::{Run, RunError};
+use super::{LogRecord, Run, RunError};
 use crate::testrun::block_diagnostic;
 use klar_interp::op::SpindleId;
 use klar_interp::{Op, OpKind, SourceLoc};
@@ -22,28 +22,25 @@ impl Run<'_, '_> {
             }
             OpKind::Stop { optional } => {
                 // A run without an operator cannot wait for a restart: it logs and goes on.
-                tracing::info!(
-                    line = op.loc.line,
-                    optional,
-                    "program stop (no operator: continuing)"
-                );
+                self.log.send(LogRecord::ProgramStop {
+                    line: op.loc.line,
+                    optional: *optional,
+                });
                 Ok(())
             }
             OpKind::MachineFunction { number, stop, wait } => {
                 // The simulated machine has nothing to switch: the function is logged; the
                 // planner has already stopped the path and holds it for `wait`.
-                tracing::info!(
-                    line = op.loc.line,
-                    number,
-                    name = self.config.machine_function_name(*number),
-                    stop,
-                    wait,
-                    "machine function M{number}"
-                );
+                self.log.send(LogRecord::MachineFunction {
+                    line: op.loc.line,
+                    number: *number,
+                    stop: *stop,
+                    wait: *wait,
+                });
                 Ok(())
             }
-            other => {
-                tracing::debug!(line = op.loc.line, ?other, "event");
+            _ => {
+                self.log.send(LogRecord::Event { line: op.loc.line });
                 Ok(())
             }
         }

@@ -91,17 +91,16 @@ impl Run<'_, '_> {
         match level {
             StopLevel::None => Ok(()),
             StopLevel::Controlled => {
-                tracing::info!(
-                    line = self.line,
-                    "stop requested by the operator: feed hold"
-                );
+                self.log
+                    .send(super::LogRecord::OperatorStop { line: self.line });
                 if self.stopping.is_none() {
                     self.begin_path_stop(StopCause::Operator, None, error);
                 }
                 Ok(())
             }
             StopLevel::Quick => {
-                tracing::info!(line = self.line, "second stop request: quick stop");
+                self.log
+                    .send(super::LogRecord::OperatorQuickStop { line: self.line });
                 // A stop on the path under way keeps its cause (the operator's, or a fault's
                 // that came first); the quick stop replaces its report.
                 let error = match self.stopping.take() {

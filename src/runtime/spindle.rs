@@ -61,10 +61,8 @@ impl Run<'_, '_> {
         };
         let Some(spindle) = self.io.spindle_mut() else {
             if signed != 0.0 && !self.warned_no_spindle {
-                tracing::warn!(
-                    line = loc.line,
-                    "this machine has no spindle: S/M3/M4 ignored"
-                );
+                self.log
+                    .send(super::LogRecord::NoSpindle { line: loc.line });
                 self.warned_no_spindle = true;
             }
             return Ok(());

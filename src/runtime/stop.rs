@@ -81,7 +81,6 @@ impl Run<'_, '_> {
         for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
             f.position_at_rest = x;
         }
-        tracing::warn!("{report}");
         self.report.stop = Some(report.clone());
         self.stop_report = Some(report);
         pending.error
@@ -104,11 +103,11 @@ impl Run<'_, '_> {
             self.wait_until(t);
             self.shift += period;
             if let Err(e) = self.io.cycle(t) {
-                tracing::error!("stop on the path: the backend no longer answers: {e}");
+                self.defer("stop on the path: the backend no longer answers", e.into());
                 break;
             }
             if let Err(e) = self.record_cycle(t) {
-                tracing::warn!("stop on the path: trace: {e}");
+                self.defer("stop on the path: trace", e);
             }
             let mut moved = false;
             for (a, b) in self.actual.iter().zip(last.iter_mut()) {
@@ -159,7 +158,8 @@ impl Run<'_, '_> {
             }
             other => (StopCause::Program(other.to_string()), None),
         };
-        tracing::error!(line = self.line, "{cause}: quick stop");
+        self.log
+            .send(super::LogRecord::QuickStop { line: self.line });
         let mut report = StopReport {
             cause,
             axis,
@@ -222,11 +222,11 @@ impl Run<'_, '_> {
             self.wait_until(t);
             self.shift += period;
             if let Err(e) = self.io.cycle(t) {
-                tracing::error!("quick stop: the backend no longer answers: {e}");
+                self.defer("quick stop: the backend no longer answers", e.into());
                 break;
             }
             if let Err(e) = self.record_cycle(t) {
-                tracing::warn!("quick stop: trace: {e}");
+                self.defer("quick stop: trace", e);
             }
             let (mut moved, mut moved_faulted) = (false, false);
             for (i, (f, (a, b))) in self
@@ -261,7 +261,7 @@ impl Run<'_, '_> {
         // At rest the drives are switched off: a faulted machine waits powerless for its
         // reset (an axis the monitor tripped may still pull toward an unreachable command).
         if let Err(e) = self.io.disable() {
-            tracing::warn!("quick stop: disabling the drives: {e}");
+            self.defer("quick stop: disabling the drives", e.into());
         }
         if self.report.realtime {
             // A bus backend switches a braking drive off only at its standstill, which can
@@ -278,7 +278,6 @@ impl Run<'_, '_> {
         for (f, &x) in report.axes.iter_mut().zip(&self.actual) {
             f.position_at_rest = x;
         }
-        tracing::warn!("{report}");
         self.report.stop = Some(report.clone());
         self.stop_report = Some(report);
         error
