@@ -22,10 +22,12 @@ use std::path::Path;
 
 mod locate;
 mod probe;
+mod probe_features;
 mod ranges;
 mod tables;
 mod validate;
 pub use probe::{BoreConfig, BossConfig, PocketConfig, ProbeConfig, WorkpieceConfig};
+pub use probe_features::{HoleCircleConfig, RidgeConfig, SlotConfig};
 pub use ranges::{MAX_PIVOT, MAX_SPINDLE_RPM, MAX_TRAVEL};
 pub use tables::ActivePreset;
 

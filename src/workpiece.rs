@@ -1,6 +1,7 @@
 //! The simulated workpiece a simulated touch probe finds: the program's BLK FORM box (or a
-//! box the machine file gives) with bores and rectangular pockets cut from its top and round
-//! bosses standing on it, placed on
+//! box the machine file gives) with bores, rectangular pockets and straight slots cut from its
+//! top and round bosses (studs) and straight ridges standing on it (slots, ridges and
+//! bolt-hole circles in [`features`]), placed on
 //! the machine with an offset and a turn about Z that the program does not know — the
 //! set-up error that probing cycles measure.
 //!
@@ -14,6 +15,9 @@
 //! bisected to far below a nanometre.
 
 use klar_interp::{Blank, Probe};
+
+mod features;
+pub use features::{HoleCircle, Ridge, Slot};
 
 /// A bore cut into the top of the part.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -65,6 +69,10 @@ pub struct SimWorkpiece {
     pub pockets: Vec<Pocket>,
     /// Bosses.
     pub bosses: Vec<Boss>,
+    /// Straight slots cut from the top.
+    pub slots: Vec<Slot>,
+    /// Straight ridges standing on the top.
+    pub ridges: Vec<Ridge>,
 }
 
 /// Signed distance from `p` to the box `[lo, hi]` (negative inside).
@@ -156,6 +164,11 @@ impl SimWorkpiece {
             ];
             d = d.max(-box_distance(q, lo, hi));
         }
+        for s in &self.slots {
+            let cut =
+                features::bar_distance(q, s.from, s.to, s.width / 2.0, top - s.depth, top + ABOVE);
+            d = d.max(-cut);
+        }
         for b in &self.bosses {
             d = d.min(cylinder_distance(
                 q,
@@ -164,6 +177,10 @@ impl SimWorkpiece {
                 top,
                 top + b.height,
             ));
+        }
+        for r in &self.ridges {
+            let bar = features::bar_distance(q, r.from, r.to, r.width / 2.0, top, top + r.height);
+            d = d.min(bar);
         }
         d
     }
@@ -240,6 +257,8 @@ mod tests {
             }],
             pockets: Vec::new(),
             bosses: Vec::new(),
+            slots: Vec::new(),
+            ridges: Vec::new(),
         }
     }
 

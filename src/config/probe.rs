@@ -3,6 +3,7 @@
 //! klar's defaults); `TCH PROBE` cycles are refused on a machine without one.
 
 use super::MachineConfig;
+use super::probe_features::{self, HoleCircleConfig, RidgeConfig, SlotConfig};
 use crate::workpiece::{Bore, Boss, Pocket, SimWorkpiece};
 use klar_interp::{Interpreter, ProbeData};
 use serde::Deserialize;
@@ -102,6 +103,15 @@ pub struct WorkpieceConfig {
     /// Round bosses standing on the top.
     #[serde(default, rename = "boss")]
     pub bosses: Vec<BossConfig>,
+    /// Straight slots cut from the top.
+    #[serde(default, rename = "slot")]
+    pub slots: Vec<SlotConfig>,
+    /// Straight ridges standing on the top.
+    #[serde(default, rename = "ridge")]
+    pub ridges: Vec<RidgeConfig>,
+    /// Bolt-hole circles (bores) cut from the top.
+    #[serde(default, rename = "hole_circle")]
+    pub hole_circles: Vec<HoleCircleConfig>,
 }
 
 impl MachineConfig {
@@ -148,6 +158,7 @@ impl MachineConfig {
                     diameter: b.diameter,
                     depth: b.depth,
                 })
+                .chain(w.hole_circles.iter().flat_map(|c| c.feature().bores()))
                 .collect(),
             pockets: w
                 .pockets
@@ -167,6 +178,8 @@ impl MachineConfig {
                     height: b.height,
                 })
                 .collect(),
+            slots: w.slots.iter().map(SlotConfig::feature).collect(),
+            ridges: w.ridges.iter().map(RidgeConfig::feature).collect(),
         })
     }
 
@@ -233,6 +246,7 @@ impl MachineConfig {
                 )?;
                 positive(&format!("workpiece pocket {} depth", i + 1), p.depth)?;
             }
+            probe_features::validate(&w.slots, &w.ridges, &w.hole_circles, &positive)?;
         }
         Ok(())
     }
