@@ -245,6 +245,9 @@ pub enum ProgramError {
     /// A touch-probe cycle failed (nothing touched, already in contact, bad parameters).
     #[error("{0}")]
     Probe(crate::probe::ProbeError),
+    /// A measuring touch-probe cycle found a result out of tolerance and Q309=1 asks to stop.
+    #[error("{0}")]
+    Tolerance(crate::tnc::probe_report::ToleranceError),
     /// A cycle call without a defined machining cycle.
     #[error("{0} without a defined machining cycle: program CYCL DEF first")]
     NoCycle(&'static str),

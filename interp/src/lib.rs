@@ -39,5 +39,6 @@ pub use source::MAX_BLOCK_BYTES;
 pub use tnc::contour::SPLINE_START_TOLERANCE;
 pub use tnc::cycle_table::{DatumTable, DatumTableError};
 pub use tnc::exec::{Blank, C_RADIUS_TOLERANCE, MAX_IPA};
+pub use tnc::probe_report::ToleranceError;
 pub use tnc::table::MAX_TABLE_FILE;
 pub use tnc::tools::{Tool, ToolTable, ToolTableError};

@@ -33,7 +33,10 @@
 //!   **423/424** (measure rectangle inside / outside, nominal sides Q282/Q283) probe like
 //!   400, 412/413 and 410/411 but write no preset; they add the deviations from nominal:
 //!   Q161/Q162 of the centre, Q163 of the diameter, Q164/Q165 of the sides. Their
-//!   tolerance limits and program stop (Q275 …, Q309) are not checked yet.
+//!   tolerance limits, workpiece status, measuring log and program stop (Q275 …, Q281,
+//!   Q309) are in [`super::probe_measure`] and [`super::probe_report`].
+//! - The cycles 402, 408, 409, 414 … 416, 418 are in [`super::probe_ref`], 425, 426 and 430
+//!   in [`super::probe_measure`].
 //! - **417** (preset in the tool axis): the probe stands over Q263/Q264 at the clearance
 //!   above the nominal surface height Q294 and probes downward; the height touched is Q160
 //!   and becomes the tool-axis datum Q333.
@@ -115,14 +118,14 @@ fn renamed(def: &CycleDef, names: &[(u32, u32)]) -> CycleDef {
 }
 
 /// Degrees in (−90°, 90°]: the angle of an undirected line.
-fn line_angle(deg: f64) -> f64 {
+pub(super) fn line_angle(deg: f64) -> f64 {
     let a = deg.rem_euclid(180.0);
     if a > 90.0 { a - 180.0 } else { a }
 }
 
 impl Machine {
     /// A required parameter of `def`.
-    fn need(&self, def: &CycleDef, q: u32) -> Result<f64, ExecError> {
+    pub(super) fn need(&self, def: &CycleDef, q: u32) -> Result<f64, ExecError> {
         def.get(ParamKey::Q(q))
             .map(|v| v * self.unit_of(q))
             .ok_or(perr(ProbeError::Missing {
@@ -132,7 +135,7 @@ impl Machine {
     }
 
     /// An optional parameter of `def`.
-    fn opt(&self, def: &CycleDef, q: u32, default: f64) -> f64 {
+    pub(super) fn opt(&self, def: &CycleDef, q: u32, default: f64) -> f64 {
         def.get(ParamKey::Q(q))
             .map_or(default, |v| v * self.unit_of(q))
     }
@@ -140,7 +143,8 @@ impl Machine {
     /// The length factor of parameter `q` (angles, counts and switches are not lengths).
     fn unit_of(&self, q: u32) -> f64 {
         match q {
-            247 | 272 | 267 | 301 | 303 | 305 | 307 | 325 | 365 | 381 | 423 => 1.0,
+            247 | 267 | 272 | 281 | 291 | 292 | 293 | 301 | 303 | 304 | 305 | 307 | 308 | 309
+            | 312 | 325 | 330 | 337 | 365 | 380 | 381 | 402 | 423 => 1.0,
             _ => self.unit,
         }
     }
@@ -162,27 +166,43 @@ impl Machine {
                 let xf = self.cyc.xf;
                 self.write_preset(def.number, def, xf, &[None; 9], Some(rot), out, run.loc)
             }
-            420 => self.cycle400(def, false, run, out),
+            420 => {
+                self.cycle400(def, false, run, out)?;
+                self.measured(def, run)
+            }
             410 | 411 => self.cycle41x_rect(def, def.number == 410, true, run, out),
             412 | 413 => self.cycle41x_circle(def, def.number == 412, true, run, out),
             421 | 422 => {
                 let d = renamed(def, &centre);
-                self.cycle41x_circle(&d, def.number == 421, false, run, out)
+                self.cycle41x_circle(&d, def.number == 421, false, run, out)?;
+                self.measured(def, run)
             }
             423 | 424 => {
                 let d = renamed(def, &[centre[0], centre[1], (282, 323), (283, 324)]);
-                self.cycle41x_rect(&d, def.number == 423, false, run, out)
+                self.cycle41x_rect(&d, def.number == 423, false, run, out)?;
+                self.measured(def, run)
             }
             417 => self.cycle417(def, run, out),
             419 => self.cycle419(def, run, out),
-            427 => self.cycle427(def, run, out),
+            427 => {
+                self.cycle427(def, run, out)?;
+                self.measured(def, run)
+            }
             431 => self.cycle431(def, run, out),
+            408 | 409 => self.cycle408_409(def, def.number == 408, run, out),
+            414 => self.cycle414(def, run, out),
+            415 => self.cycle415(def, run, out),
+            416 | 430 => self.cycle416_430(def, def.number == 416, run, out),
+            418 => self.cycle418(def, run, out),
+            402 => self.cycle402(def, run, out),
+            425 => self.cycle425(def, run, out),
+            426 => self.cycle426(def, run, out),
             n => Err(perr(ProbeError::Unknown(n))),
         }
     }
 
     /// The clearance before a touch point: the probe's, the cycle's Q320 and the ball.
-    fn lead(&self, def: &CycleDef) -> f64 {
+    pub(super) fn lead(&self, def: &CycleDef) -> f64 {
         self.probe.data.set_up + self.opt(def, 320, 0.0) + self.probe.data.radius
     }
 
@@ -236,7 +256,7 @@ impl Machine {
     }
 
     /// The centre of a bore probed from `c` outward at four points (0°, 90°, 180°, 270°).
-    fn hole_centre(
+    pub(super) fn hole_centre(
         &mut self,
         c: [f64; 2],
         h: f64,
@@ -457,7 +477,7 @@ impl Machine {
 
     /// Q381=1: probes the tool axis at Q382/Q383 downward from above Q384 and keeps the
     /// surface height for the datum (Q333).
-    fn tool_axis_datum(
+    pub(super) fn tool_axis_datum(
         &mut self,
         def: &CycleDef,
         mut run: Run,

@@ -25,9 +25,9 @@
 //! - a positioning move on which the stylus meets the part stops the program (a collision of
 //!   the probe: on the machine the stylus deflects outside a probing move);
 //!
-//! Not modelled: the tilted working plane (probing is refused in it), probing in the datum
-//! table (Q303=0), and the stylus deflection after the trigger (the simulated axes stop on
-//! the trigger point, which the interpreter knows before the move).
+//! Not modelled: the tilted working plane (probing is refused in it) and the stylus
+//! deflection after the trigger (the simulated axes stop on the trigger point, which the
+//! interpreter knows before the move). Q303=0 (the datum table): see [`super::probe_ref`].
 
 use std::collections::VecDeque;
 
@@ -306,8 +306,8 @@ impl Machine {
     }
 
     /// Writes a measured datum: the program point `measured` (working-plane coordinates;
-    /// `None` for axes not measured) shall read `new` afterwards. Row Q305 of the preset table
-    /// when Q303=1 (see the module doc).
+    /// `None` for axes not measured) shall read `new` afterwards (preset or datum table: see
+    /// [`Machine::put_datum`]).
     pub(super) fn set_datum(
         &mut self,
         def: &CycleDef,
@@ -316,34 +316,7 @@ impl Machine {
         out: &mut VecDeque<Op>,
         loc: SourceLoc,
     ) -> Result<(), ExecError> {
-        let cycle = def.number;
-        let transfer = def.get(ParamKey::Q(303)).unwrap_or(1.0);
-        if transfer == 0.0 {
-            return Err(perr(ProbeError::Bad {
-                cycle,
-                what: "Q303=0 (datum in the datum table) is not supported yet; Q303=1 writes the preset table".into(),
-            }));
-        }
-        let (a, b, n) = self.plane.axes();
-        let axes = [a, b, n];
-        let here_p = self.pose_at([
-            measured[0].unwrap_or(0.0),
-            measured[1].unwrap_or(0.0),
-            measured[2].unwrap_or(0.0),
-        ]);
-        let there_p = self.pose_at(new);
-        let m_here = self.cyc.xf.map_point(&here_p);
-        let m_there = self.cyc.xf.map_point(&there_p);
-        let mut xf = self.cyc.xf;
-        let mut written = [None; 9];
-        for (k, ax) in axes.iter().enumerate() {
-            if measured[k].is_some() {
-                let i = ax.index();
-                xf.preset[i] += m_here[*ax] - m_there[*ax];
-                written[i] = Some(xf.preset[i]);
-            }
-        }
-        self.write_preset(cycle, def, xf, &written, None, out, loc)
+        self.put_datum(def, measured, new, None, out, loc)
     }
 
     /// Writes `xf`'s preset (`values`, basic rotation `rot`) into row Q305 and makes it act
