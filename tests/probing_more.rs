@@ -1,0 +1,505 @@
+//! Touch-probe cycles on slots, ridges, corners, hole patterns and studs
+//! (`machines/probing-features.toml`): the part lies 3.2 mm / −1.7 mm / −0.25 mm off its
+//! nominal place and is turned by 1.5° about Z (about preset 1 at X+100 Y+50 Z−60). The
+//! expected values are worked out here from the placement and the part's drawing alone.
+
+mod common;
+
+use klar::config::MachineConfig;
+use klar_interp::{AxisLetter, Interpreter, OpKind};
+use std::path::{Path, PathBuf};
+
+/// Preset 1 of `machines/probing.pr`, machine coordinates.
+const ORIGIN: [f64; 3] = [100.0, 50.0, -60.0];
+/// Where the part really lies off its nominal place.
+const OFF: [f64; 3] = [3.2, -1.7, -0.25];
+/// Its turn about Z, degrees.
+const TURN: f64 = 1.5;
+/// The stylus ball's radius (`[probe] radius`).
+const BALL: f64 = 2.0;
+/// Lengths within 1 µm, angles within 0.001°.
+const MM: f64 = 1e-3;
+const DEG: f64 = 1e-3;
+
+fn machine_path() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/probing-features.toml")
+}
+
+fn machine() -> MachineConfig {
+    MachineConfig::load(&machine_path()).expect("feature machine loads")
+}
+
+fn turn(v: [f64; 2], deg: f64) -> [f64; 2] {
+    let (s, c) = deg.to_radians().sin_cos();
+    [v[0] * c - v[1] * s, v[0] * s + v[1] * c]
+}
+
+/// Program coordinates (preset 1, no basic rotation) of part point `q`.
+fn program_of(q: [f64; 2]) -> [f64; 2] {
+    let t = turn(q, TURN);
+    [OFF[0] + t[0], OFF[1] + t[1]]
+}
+
+/// The coordinate a probing move reports (ball centre at the trigger plus the ball radius
+/// along the move) when the ball moves along program axis `k` in direction `sign` on the line
+/// where the other axis is `other`, toward the flat wall through part point `w` whose normal
+/// (part coordinates, pointing out of the material) is `n`.
+fn reported(k: usize, sign: f64, other: f64, w: [f64; 2], n: [f64; 2]) -> f64 {
+    let wp = program_of(w);
+    let np = turn(n, TURN);
+    let mut s = [0.0; 2];
+    s[1 - k] = other;
+    let mut e = [0.0; 2];
+    e[k] = sign;
+    // n·(s + t e − w) = r
+    let t =
+        (BALL - (np[0] * (s[0] - wp[0]) + np[1] * (s[1] - wp[1]))) / (np[0] * e[0] + np[1] * e[1]);
+    s[k] + t * sign + BALL * sign
+}
+
+const PRELUDE: &str = "BEGIN PGM PROBE MM
+BLK FORM 0.1 Z X-80 Y-60 Z-30
+BLK FORM 0.2 X+80 Y+60 Z+0
+TOOL CALL 1 Z S0
+L Z+50 R0 FMAX
+";
+
+fn program(name: &str, body: &str) -> (String, PathBuf) {
+    let text = format!("{PRELUDE}{body}M30\nEND PGM PROBE MM\n");
+    let path = common::temp_program(name, &text);
+    (text, path)
+}
+
+/// Runs `body` after the prelude and returns the interpreter.
+fn run_body(name: &str, body: &str) -> Interpreter {
+    let (_, path) = program(name, body);
+    let m = machine();
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    for op in it.by_ref() {
+        op.expect("the program runs");
+    }
+    it
+}
+
+fn close(what: &str, got: f64, want: f64, tol: f64) {
+    eprintln!("{what}: off by {:e}", (got - want).abs());
+    assert!(
+        (got - want).abs() <= tol,
+        "{what}: got {got}, expected {want} (±{tol})"
+    );
+}
+
+/// Preset row 1: X, Y, Z and ROT.
+fn preset1(it: &Interpreter) -> ([f64; 3], f64) {
+    let (table, active) = it.presets();
+    assert_eq!(active, Some(1));
+    let t = table.expect("preset table");
+    let row = t.row(1).expect("row 1");
+    (
+        [
+            row[0].unwrap_or(0.0),
+            row[1].unwrap_or(0.0),
+            row[2].unwrap_or(0.0),
+        ],
+        t.rot(1),
+    )
+}
+
+const C408: &str = "TCH PROBE 408 SLOT CENTER REF PT ~
+  Q321=-60 ;CENTER IN 1ST AXIS ~
+  Q322=+25 ;CENTER IN 2ND AXIS ~
+  Q311=+8 ;SLOT WIDTH ~
+  Q272=+1 ;MEASURING AXIS ~
+  Q261=-4 ;MEASURING HEIGHT ~
+  Q320=+0 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+0 ;MOVE TO CLEARANCE ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q405=+0 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+1 ;PROBE IN TS AXIS ~
+  Q382=+40 ;1ST CO. FOR TS AXIS ~
+  Q383=-55 ;2ND CO. FOR TS AXIS ~
+  Q384=+0 ;3RD CO. FOR TS AXIS ~
+  Q333=+0 ;DATUM
+";
+
+/// The slot's walls at part X−66 and X−54 along program Y+25: (− wall, + wall) reported.
+fn slot_walls(y: f64) -> (f64, f64) {
+    let lo = reported(0, -1.0, y, [-66.0, 0.0], [1.0, 0.0]);
+    let hi = reported(0, 1.0, y, [-54.0, 0.0], [-1.0, 0.0]);
+    (lo, hi)
+}
+
+/// The slot is 12 wide, but the set-up error (2.6 mm across it) is more than the clearance
+/// its nominal width leaves: with Q311=8 both touches start from the nominal centre.
+#[test]
+fn cycle_408_sets_the_slot_centre_and_the_top_as_datum() {
+    let it = run_body("probe408.h", C408);
+    let (lo, hi) = slot_walls(25.0);
+    close("Q166", it.q(166), hi - lo, MM);
+    close("Q157", it.q(157), (hi + lo) / 2.0, MM);
+    // the same from the slot's drawing: along X the turned slot is 12/cos wide, and each
+    // touch falls short of its wall by r·(1/cos − 1) (the ball meets the wall at a slant)
+    let sec = 1.0 / TURN.to_radians().cos();
+    close(
+        "Q166 from the drawing",
+        it.q(166),
+        12.0 * sec - 2.0 * BALL * (sec - 1.0),
+        1e-9,
+    );
+    let (xyz, rot) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0] + (hi + lo) / 2.0, MM);
+    // Y is not the measuring axis: it keeps its datum; Z from the tool-axis touch
+    close("preset Y", xyz[1], ORIGIN[1], 1e-12);
+    close("preset Z", xyz[2], ORIGIN[2] + OFF[2], MM);
+    close("preset ROT", rot, 0.0, 1e-12);
+}
+
+#[test]
+fn cycle_409_sets_the_ridge_centre_in_y_after_a_turn() {
+    // the ridge runs along Y: measured across X with Q272=1, then the same ridge's
+    // centre line written as datum X+5
+    let body = "TCH PROBE 409 RIDGE CENTER REF PT ~
+  Q321=-35 ;CENTER IN 1ST AXIS ~
+  Q322=+30 ;CENTER IN 2ND AXIS ~
+  Q311=+10 ;RIDGE WIDTH ~
+  Q272=+1 ;MEASURING AXIS ~
+  Q261=+4 ;MEASURING HEIGHT ~
+  Q320=+2 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q305=+1 ;NUMBER IN TABLE ~
+  Q405=+5 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+0 ;PROBE IN TS AXIS
+";
+    let it = run_body("probe409.h", body);
+    let lo = reported(0, 1.0, 30.0, [-40.0, 0.0], [-1.0, 0.0]);
+    let hi = reported(0, -1.0, 30.0, [-30.0, 0.0], [1.0, 0.0]);
+    close("Q166", it.q(166), hi - lo, MM);
+    close("Q157", it.q(157), (hi + lo) / 2.0, MM);
+    let (xyz, _) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0] + (hi + lo) / 2.0 - 5.0, MM);
+    close("preset Y", xyz[1], ORIGIN[1], 1e-12);
+}
+
+#[test]
+fn cycle_414_finds_the_outside_corner_and_turns_the_preset() {
+    let body = "TCH PROBE 414 DATUM OUTSIDE CORNER ~
+  Q263=-70 ;1ST POINT 1ST AXIS ~
+  Q264=-60 ;1ST POINT 2ND AXIS ~
+  Q326=+20 ;SPACING IN 1ST AXIS ~
+  Q296=-80 ;3RD POINT 1ST AXIS ~
+  Q297=-50 ;3RD POINT 2ND AXIS ~
+  Q327=+20 ;SPACING IN 2ND AXIS ~
+  Q261=-5 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+0 ;MOVE TO CLEARANCE ~
+  Q304=+1 ;BASIC ROTATION ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q331=+0 ;DATUM ~
+  Q332=+0 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+0 ;PROBE IN TS AXIS
+";
+    let it = run_body("probe414.h", body);
+    let c = program_of([-80.0, -60.0]);
+    close("Q151", it.q(151), c[0], MM);
+    close("Q152", it.q(152), c[1], MM);
+    let (xyz, rot) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0] + c[0], MM);
+    close("preset Y", xyz[1], ORIGIN[1] + c[1], MM);
+    close("preset ROT", rot, TURN, DEG);
+}
+
+#[test]
+fn cycle_415_finds_the_inside_corner_of_the_pocket() {
+    let body = "TCH PROBE 415 DATUM INSIDE CORNER ~
+  Q263=-25 ;1ST POINT 1ST AXIS ~
+  Q264=-15 ;1ST POINT 2ND AXIS ~
+  Q326=+10 ;SPACING IN 1ST AXIS ~
+  Q327=+8 ;SPACING IN 2ND AXIS ~
+  Q308=+3 ;CORNER ~
+  Q261=-5 ;MEASURING HEIGHT ~
+  Q320=+2 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+0 ;MOVE TO CLEARANCE ~
+  Q304=+0 ;BASIC ROTATION ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q331=+10 ;DATUM ~
+  Q332=+20 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+0 ;PROBE IN TS AXIS
+";
+    let it = run_body("probe415.h", body);
+    let c = program_of([-25.0, -15.0]);
+    close("Q151", it.q(151), c[0], MM);
+    close("Q152", it.q(152), c[1], MM);
+    let (xyz, rot) = preset1(&it);
+    // the corner reads X+10 Y+20 in the new preset (no basic rotation)
+    close("preset X", xyz[0], ORIGIN[0] + c[0] - 10.0, MM);
+    close("preset Y", xyz[1], ORIGIN[1] + c[1] - 20.0, MM);
+    close("preset ROT", rot, 0.0, 1e-12);
+}
+
+const HOLES: &str = "  Q273=+30 ;CENTER IN 1ST AXIS ~
+  Q274=-25 ;CENTER IN 2ND AXIS ~
+  Q262=+40 ;NOMINAL DIAMETER ~
+  Q291=+30 ;ANGLE OF 1ST HOLE ~
+  Q292=+150 ;ANGLE OF 2ND HOLE ~
+  Q293=+270 ;ANGLE OF 3RD HOLE ~
+  Q261=-5 ;MEASURING HEIGHT ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+";
+
+#[test]
+fn cycles_416_and_430_find_the_bolt_hole_circle() {
+    let body = format!(
+        "TCH PROBE 430 MEAS. BOLT HOLE CIRC ~
+{HOLES}  Q288=+40.1 ;MAX. LIMIT ~
+  Q289=+39.9 ;MIN. LIMIT ~
+  Q279=+0.5 ;TOLERANCE 1ST CENTER ~
+  Q280=+0.5 ;TOLERANCE 2ND CENTER ~
+  Q281=+0 ;MEASURING LOG ~
+  Q309=+0 ;PGM STOP TOLERANCE ~
+  Q330=+0 ;TOOL
+"
+    );
+    let it = run_body("probe430.h", &body);
+    let c = program_of([30.0, -25.0]);
+    close("Q151", it.q(151), c[0], MM);
+    close("Q152", it.q(152), c[1], MM);
+    close("Q153", it.q(153), 40.0, MM);
+    close("Q161", it.q(161), c[0] - 30.0, MM);
+    close("Q162", it.q(162), c[1] + 25.0, MM);
+    close("Q163", it.q(163), 0.0, MM);
+    // the set-up error puts the centre off its 0.5 mm tolerance: scrap, but no stop (Q309=0)
+    assert!((c[0] - 30.0).abs() > 0.5);
+    assert_eq!((it.q(180), it.q(181), it.q(182)), (0.0, 0.0, 1.0));
+
+    let body = format!(
+        "TCH PROBE 416 DATUM CIRCLE CENTER ~
+{HOLES}  Q305=+0 ;NUMBER IN TABLE ~
+  Q331=+0 ;DATUM ~
+  Q332=+0 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+0 ;PROBE IN TS AXIS ~
+  Q320=+0 ;SET-UP CLEARANCE
+"
+    );
+    let it = run_body("probe416.h", &body);
+    close("Q153", it.q(153), 40.0, MM);
+    let (xyz, _) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0] + c[0], MM);
+    close("preset Y", xyz[1], ORIGIN[1] + c[1], MM);
+}
+
+#[test]
+fn cycle_418_sets_the_crossing_of_the_diagonals() {
+    let body = "TCH PROBE 418 DATUM FROM 4 HOLES ~
+  Q268=+20 ;1ST CENTER 1ST AXIS ~
+  Q269=+20 ;1ST CENTER 2ND AXIS ~
+  Q270=+60 ;2ND CENTER 1ST AXIS ~
+  Q271=+20 ;2ND CENTER 2ND AXIS ~
+  Q316=+60 ;3RD CENTER 1ST AXIS ~
+  Q317=+50 ;3RD CENTER 2ND AXIS ~
+  Q318=+20 ;4TH CENTER 1ST AXIS ~
+  Q319=+50 ;4TH CENTER 2ND AXIS ~
+  Q261=-5 ;MEASURING HEIGHT ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q331=+0 ;DATUM ~
+  Q332=+0 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+0 ;PROBE IN TS AXIS
+";
+    let it = run_body("probe418.h", body);
+    let c = program_of([40.0, 35.0]);
+    close("Q151", it.q(151), c[0], MM);
+    close("Q152", it.q(152), c[1], MM);
+    let (xyz, _) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0] + c[0], MM);
+    close("preset Y", xyz[1], ORIGIN[1] + c[1], MM);
+}
+
+#[test]
+fn cycle_402_turns_the_preset_by_the_line_through_two_studs() {
+    let body = "TCH PROBE 402 ROT OF 2 STUDS ~
+  Q268=+0 ;1ST CENTER 1ST AXIS ~
+  Q269=+15 ;1ST CENTER 2ND AXIS ~
+  Q313=+12 ;DIAMETER OF STUD 1 ~
+  Q261=+5 ;MEASURING HEIGHT 1 ~
+  Q270=+0 ;2ND CENTER 1ST AXIS ~
+  Q271=+48 ;2ND CENTER 2ND AXIS ~
+  Q314=+12 ;DIAMETER OF STUD 2 ~
+  Q315=+5 ;MEASURING HEIGHT 2 ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+0 ;MOVE TO CLEARANCE ~
+  Q307=+90 ;PRESET ROTATION ANG. ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q402=+0 ;COMPENSATION ~
+  Q337=+0 ;SET TO ZERO
+";
+    let it = run_body("probe402.h", body);
+    close("Q150", it.q(150), 90.0 + TURN, DEG);
+    let (xyz, rot) = preset1(&it);
+    close("preset ROT", rot, TURN, DEG);
+    close("preset X", xyz[0], ORIGIN[0], 1e-12);
+}
+
+const C425: &str = "TCH PROBE 425 MEASURE INSIDE WIDTH ~
+  Q328=-60 ;STARTNG PNT 1ST AXIS ~
+  Q329=+25 ;STARTNG PNT 2ND AXIS ~
+  Q310=+0 ;OFFS. 2ND MEASUREMNT ~
+  Q272=+1 ;MEASURING AXIS ~
+  Q261=-4 ;MEASURING HEIGHT ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q311=+12 ;NOMINAL LENGTH ~
+  Q288=+12.05 ;MAXIMUM DIMENSION ~
+  Q289=+11.95 ;MINIMUM DIMENSION ~
+  Q281=+1 ;MEASURING LOG ~
+  Q309=+1 ;PGM STOP TOLERANCE ~
+  Q330=+0 ;TOOL ~
+  Q320=+0 ;SET-UP CLEARANCE ~
+  Q301=+1 ;MOVE TO CLEARANCE
+";
+
+#[test]
+fn cycles_425_and_426_measure_slot_and_ridge_widths() {
+    let it = run_body("probe425.h", C425);
+    // both touches on Y+25: +X first, then −X
+    let (lo, hi) = slot_walls(25.0);
+    close("Q156", it.q(156), hi - lo, MM);
+    close("Q157", it.q(157), (hi + lo) / 2.0, MM);
+    close("Q166", it.q(166), hi - lo - 12.0, MM);
+    assert_eq!((it.q(180), it.q(181), it.q(182)), (1.0, 0.0, 0.0));
+    // Q310=+5: the second touch on Y+30; across the turned slot the width grows by
+    // 5·tan 1.5°, past the limit: scrap, and with Q309=0 no stop
+    let body = C425
+        .replace("Q310=+0", "Q310=+5")
+        .replace("Q309=+1", "Q309=+0");
+    let it = run_body("probe425_offset.h", &body);
+    let hi = slot_walls(25.0).1;
+    let lo = slot_walls(30.0).0;
+    close("Q156 offset", it.q(156), hi - lo, MM);
+    close("Q157 offset", it.q(157), (hi + lo) / 2.0, MM);
+    assert!(hi - lo > 12.05);
+    assert_eq!((it.q(180), it.q(181), it.q(182)), (0.0, 0.0, 1.0));
+
+    let body = "TCH PROBE 426 MEASURE RIDGE WIDTH ~
+  Q263=-30 ;1ST POINT 1ST AXIS ~
+  Q264=+25 ;1ST POINT 2ND AXIS ~
+  Q265=-40 ;2ND POINT 1ST AXIS ~
+  Q266=+25 ;2ND POINT 2ND AXIS ~
+  Q272=+1 ;MEASURING AXIS ~
+  Q261=+4 ;MEASURING HEIGHT ~
+  Q320=+2 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q311=+10 ;NOMINAL LENGTH ~
+  Q288=+10.1 ;MAXIMUM DIMENSION ~
+  Q289=+9.9 ;MINIMUM DIMENSION ~
+  Q281=+0 ;MEASURING LOG ~
+  Q309=+1 ;PGM STOP TOLERANCE ~
+  Q330=+0 ;TOOL
+";
+    let it = run_body("probe426.h", body);
+    let hi = reported(0, -1.0, 25.0, [-30.0, 0.0], [1.0, 0.0]);
+    let lo = reported(0, 1.0, 25.0, [-40.0, 0.0], [-1.0, 0.0]);
+    close("Q156", it.q(156), hi - lo, MM);
+    close("Q157", it.q(157), (hi + lo) / 2.0, MM);
+    close("Q166", it.q(166), hi - lo - 10.0, MM);
+}
+
+#[test]
+fn a_width_out_of_tolerance_stops_the_program_and_logs_the_measurement() {
+    let body = C425
+        .replace("Q288=+12.05", "Q288=+11.99")
+        .replace("Q289=+11.95", "Q289=+11.9");
+    let (text, path) = program("probe425_tol.h", &format!("{body}L X+0 Y+0 Z+30 FMAX\n"));
+    let m = machine();
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let mut after = false;
+    let mut err = None;
+    for op in it.by_ref() {
+        match op {
+            Ok(op) => {
+                after |= matches!(op.kind, OpKind::Line { to, .. } if (to[AxisLetter::Z] - (ORIGIN[2] + 30.0)).abs() < 1e-9)
+            }
+            Err(e) => {
+                err = Some(e);
+                break;
+            }
+        }
+    }
+    let err = err.expect("the cycle stops the program");
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("TCH PROBE 425"))
+        .map(|i| i as u32 + 1);
+    assert_eq!(Some(err.line), line, "{}", err.message);
+    assert!(
+        err.message
+            .contains("tolerance exceeded: TCH PROBE 425, Q156 width"),
+        "{}",
+        err.message
+    );
+    assert!(err.message.contains("(scrap)"), "{}", err.message);
+    assert!(!after, "no block after the cycle runs");
+    // the width measured is nearer 12 than 11.99: too wide a slot is scrap
+    let (lo, hi) = slot_walls(25.0);
+    assert!(hi - lo > 11.99);
+    close("Q156", it.q(156), hi - lo, MM);
+    assert_eq!((it.q(180), it.q(181), it.q(182)), (0.0, 0.0, 1.0));
+    // the log next to the program
+    let log = std::fs::read_to_string(path.with_file_name("TCHPR425.TXT")).expect("log written");
+    assert!(log.contains("TCH PROBE 425 measuring log"), "{log}");
+    assert!(
+        log.contains("Q156 width") && log.contains("above max"),
+        "{log}"
+    );
+    assert!(log.contains(&format!("{:.4}", hi - lo)), "{log}");
+    assert!(log.contains("workpiece status: scrap"), "{log}");
+}
+
+#[test]
+fn q303_0_writes_the_slot_centre_into_the_datum_table() {
+    let body = C408
+        .replace("Q303=+1", "Q303=+0")
+        .replace("Q305=+0", "Q305=+1")
+        .replace("Q381=+1", "Q381=+0");
+    let body = format!("{body}CYCL DEF 7.0 DATUM SHIFT\nCYCL DEF 7.1 #1\nL X+0 Y+25 Z+30 FMAX\n");
+    let (_, path) = program("probe408_d.h", &body);
+    let m = machine();
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let mut last = None;
+    for op in it.by_ref() {
+        if let OpKind::Line { to, .. } = op.expect("runs").kind {
+            last = Some(to);
+        }
+    }
+    let (lo, hi) = slot_walls(25.0);
+    let end = last.expect("moves");
+    // datum shift #1 puts X+0 on the slot's centre line; the preset is untouched
+    close("X", end[AxisLetter::X], ORIGIN[0] + (hi + lo) / 2.0, MM);
+    close("Y", end[AxisLetter::Y], ORIGIN[1] + 25.0, 1e-9);
+    let (xyz, _) = preset1(&it);
+    close("preset X", xyz[0], ORIGIN[0], 1e-12);
+}
+
+#[test]
+fn the_example_programs_check_on_the_feature_machine() {
+    let m = machine_path();
+    for name in [
+        "probing/slot_ridge.h",
+        "probing/corners.h",
+        "probing/hole_patterns.h",
+        "probing/studs.h",
+    ] {
+        let p = common::program(name);
+        let (ok, out, err) =
+            common::klar_cli(&["check", "--machine", common::arg(&m), common::arg(&p)]);
+        assert!(ok, "{name}: {out}{err}");
+    }
+}
