@@ -61,7 +61,7 @@ fn program_files(dir: &Path, depth: u32, out: &mut Vec<PathBuf>) {
 
 /// The machine an example program's own tests run it on: the auxiliary axes on the Modbus
 /// machine, programs moving rotary axes (or tilting, or under TCPM) on mill5, probing
-/// programs on the probing mill, lathe programs on the lathe, everything else on the built-in
+/// programs on the probing mill (those in programs/probing/ on its feature part), lathe programs on the lathe, everything else on the built-in
 /// mill.
 fn machine_for(path: &Path) -> MachineConfig {
     if path.file_name().is_some_and(|n| n == "aux_axes.h") {
@@ -69,7 +69,15 @@ fn machine_for(path: &Path) -> MachineConfig {
     }
     let text = std::fs::read_to_string(path).unwrap_or_default();
     if text.contains("TCH PROBE") {
-        return machine_file("probing-mill.toml");
+        let features = path
+            .parent()
+            .and_then(Path::file_name)
+            .is_some_and(|d| d == "probing");
+        return machine_file(if features {
+            "probing-features.toml"
+        } else {
+            "probing-mill.toml"
+        });
     }
     let rotary = [
         "PLANE",
