@@ -503,3 +503,98 @@ fn the_example_programs_check_on_the_feature_machine() {
         assert!(ok, "{name}: {out}{err}");
     }
 }
+
+/// Runs `body` after the prelude and asserts that the first error is at `line` (column 1),
+/// says `says`, and that nothing of that block moved.
+fn refused_at(name: &str, body: &str, line: u32, says: &str) {
+    let (_, path) = program(name, body);
+    let m = machine();
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let mut moved_there = false;
+    let mut err = None;
+    for op in it.by_ref() {
+        match op {
+            Ok(op) => moved_there |= op.loc.line == line,
+            Err(e) => {
+                err = Some(e);
+                break;
+            }
+        }
+    }
+    let err = err.expect("refused");
+    assert!(err.message.contains(says), "{name}: {}", err.message);
+    assert_eq!((err.line, err.col), (line, 1), "{name}: {}", err.message);
+    assert!(!moved_there, "{name}: the refused block moved");
+}
+
+#[test]
+fn bad_cycle_parameters_are_refused_at_their_block_before_any_move() {
+    refused_at(
+        "probe415_q308.h",
+        "TCH PROBE 415 ~\n  Q263=-25 ~\n  Q264=-15 ~\n  Q326=+10 ~\n  Q327=+8 ~\n  Q308=+5 ~\n  Q261=-5 ~\n  Q260=+20\n",
+        6,
+        "Q308=5: the corner is 1, 2, 3 or 4",
+    );
+    refused_at(
+        "probe414_dir.h",
+        "TCH PROBE 414 ~\n  Q263=-70 ~\n  Q264=-60 ~\n  Q326=+20 ~\n  Q296=-70 ~\n  Q297=-50 ~\n  Q327=+20 ~\n  Q261=-5 ~\n  Q260=+20\n",
+        6,
+        "point 3 (Q296/Q297) must lie off point 1",
+    );
+    refused_at(
+        "probe408_axis.h",
+        &C408.replace("Q272=+1", "Q272=+3"),
+        6,
+        "Q272=3: the measuring axis is 1 or 2",
+    );
+    refused_at(
+        "probe430_missing.h",
+        "TCH PROBE 430 ~\n  Q273=+30 ~\n  Q274=-25 ~\n  Q262=+40 ~\n  Q291=+30 ~\n  Q292=+150 ~\n  Q261=-5 ~\n  Q260=+20\n",
+        6,
+        "TCH PROBE 430 needs Q293",
+    );
+    refused_at(
+        "probe425_limits.h",
+        &C425.replace("Q289=+11.95", "Q289=+12.5"),
+        6,
+        "the smallest size 12.5 lies above the largest 12.05",
+    );
+    // Q303=0 on a machine without a datum table
+    let (_, path) = program(
+        "probe408_nodatum.h",
+        &C408
+            .replace("Q303=+1", "Q303=+0")
+            .replace("Q305=+0", "Q305=+2"),
+    );
+    let mut m = machine();
+    m.datum_table = None;
+    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
+    let err = it.find_map(Result::err).expect("refused");
+    assert!(err.message.contains("no datum table"), "{}", err.message);
+}
+
+#[test]
+fn bad_features_in_the_machine_file_are_refused_with_their_name() {
+    let text = std::fs::read_to_string(machine_path()).expect("machine file");
+    for (from, to, says) in [
+        (
+            "count = 3",
+            "count = 0",
+            "hole_circle 1 count must lie in 1 … 360",
+        ),
+        (
+            "width = 12.0",
+            "width = -12.0",
+            "workpiece slot 1 width must be a positive number",
+        ),
+        (
+            "height = 8.0",
+            "height = nan",
+            "workpiece ridge 1 height must be a positive number",
+        ),
+    ] {
+        let bad = text.replacen(from, to, 1);
+        let err = MachineConfig::parse("bad.toml", &bad).expect_err(says);
+        assert!(err.to_string().contains(says), "{err}");
+    }
+}
