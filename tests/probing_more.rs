@@ -598,3 +598,47 @@ fn bad_features_in_the_machine_file_are_refused_with_their_name() {
         assert!(err.to_string().contains(says), "{err}");
     }
 }
+
+#[test]
+fn measuring_a_stud_too_large_is_rework_and_a_bore_too_small_stops() {
+    // 422 on the stud of Ø12 with limits below it: rework, no stop without Q309
+    let body = "TCH PROBE 422 MEAS. CIRCLE OUTSIDE ~
+  Q273=+0 ;CENTER IN 1ST AXIS ~
+  Q274=+15 ;CENTER IN 2ND AXIS ~
+  Q262=+12 ;NOMINAL DIAMETER ~
+  Q325=+0 ;STARTING ANGLE ~
+  Q247=+90 ;STEPPING ANGLE ~
+  Q261=+5 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+1 ;MOVE TO CLEARANCE ~
+  Q275=+11.9 ;MAXIMUM LIMIT ~
+  Q276=+11.8 ;MINIMUM LIMIT ~
+  Q281=+0 ;MEASURING LOG
+";
+    let it = run_body("probe422.h", body);
+    close("Q153", it.q(153), 12.0, MM);
+    assert_eq!((it.q(180), it.q(181), it.q(182)), (0.0, 1.0, 0.0));
+    // 421 in the bore of Ø16 at (20, 20) with a smallest diameter above it: rework, and
+    // Q309=1 stops at the cycle (a nominal Ø12 keeps the touch points clear of the wall of
+    // the bore lying 3 mm off)
+    let body = "TCH PROBE 421 MEASURE HOLE ~
+  Q273=+20 ;CENTER IN 1ST AXIS ~
+  Q274=+20 ;CENTER IN 2ND AXIS ~
+  Q262=+12 ;NOMINAL DIAMETER ~
+  Q325=+0 ;STARTING ANGLE ~
+  Q247=+90 ;STEPPING ANGLE ~
+  Q261=-5 ;MEASURING HEIGHT ~
+  Q320=+0 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+1 ;MOVE TO CLEARANCE ~
+  Q276=+16.01 ;MINIMUM LIMIT ~
+  Q309=+1 ;PGM STOP TOLERANCE
+";
+    refused_at(
+        "probe421_tol.h",
+        body,
+        6,
+        "tolerance exceeded: TCH PROBE 421, Q153 diameter measured 16.0000 lies outside at least 16.0100 (rework)",
+    );
+}

@@ -29,7 +29,7 @@ use crate::op::SourceLoc;
 pub enum ToleranceError {
     /// A measured value outside its limits.
     #[error(
-        "tolerance exceeded: TCH PROBE {cycle}, {what} measured {actual:.4} lies outside {min:.4} … {max:.4} ({status})"
+        "tolerance exceeded: TCH PROBE {cycle}, {what} measured {actual:.4} lies outside {allowed} ({status})"
     )]
     Exceeded {
         /// Cycle number.
@@ -38,10 +38,8 @@ pub enum ToleranceError {
         what: String,
         /// The value measured, program units.
         actual: f64,
-        /// Lowest value allowed.
-        min: f64,
-        /// Highest value allowed.
-        max: f64,
+        /// The values allowed, e.g. `9.9500 … 10.0500` or `at most 10.0500`.
+        allowed: String,
         /// `rework` or `scrap`.
         status: &'static str,
     },
@@ -166,8 +164,12 @@ impl Machine {
                 cycle,
                 what: bad.what.clone(),
                 actual: bad.actual,
-                min: bad.min.unwrap_or(f64::NEG_INFINITY),
-                max: bad.max.unwrap_or(f64::INFINITY),
+                allowed: match (bad.min, bad.max) {
+                    (Some(lo), Some(hi)) => format!("{lo:.4} … {hi:.4}"),
+                    (Some(lo), None) => format!("at least {lo:.4}"),
+                    (None, Some(hi)) => format!("at most {hi:.4}"),
+                    (None, None) => "its limits".into(),
+                },
                 status: bad.status().word(),
             })));
         }
