@@ -37,6 +37,7 @@ mod spindle;
 mod stop;
 pub mod stream;
 pub(crate) mod sync;
+pub(crate) mod tap;
 
 use crate::config::MachineConfig;
 use crate::latency::Pacer;
@@ -219,6 +220,8 @@ pub struct Run<'a, 'w> {
     operator_seen: StopLevel,
     /// A pass geared to the spindle under way (a thread pass).
     sync: Option<sync::SyncPass>,
+    /// A rigid tap geared to the spindle (idle between taps).
+    tap: tap::TapPass,
 }
 
 impl Run<'_, '_> {
@@ -625,6 +628,7 @@ impl<'a, 'w> Run<'a, 'w> {
             operator: None,
             operator_seen: StopLevel::None,
             sync: None,
+            tap: tap::TapPass::idle(64),
             log,
             deferred: None,
         };
@@ -640,9 +644,14 @@ impl<'a, 'w> Run<'a, 'w> {
         if self.stop_report.is_some() {
             return Err(RunError::Stopped { line: self.line });
         }
-        if self.sync.is_some() {
+        if self.sync.is_some() || self.tap.active() {
             // Inside a geared pass neither hold nor stop acts: the pass runs to its end.
-            return match self.sync_step() {
+            let geared = if self.tap.active() {
+                self.tap_step()
+            } else {
+                self.sync_step()
+            };
+            return match geared {
                 Ok(()) => Ok(true),
                 Err(
                     e @ (RunError::Fault { .. } | RunError::Backend(_) | RunError::Setpoint { .. }),

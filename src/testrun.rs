@@ -381,6 +381,12 @@ impl<'a> MachineChecks<'a> {
                 self.widen(&op, report);
                 self.spindle_sync(&op, report);
             }
+            OpKind::RigidTap { .. } => {
+                report.motion_ops += 1;
+                report.geared_ops += 1;
+                self.widen(&op, report);
+                self.rigid_tap(&op, report);
+            }
             OpKind::RadiusComp { side } if *side != klar_interp::CompSide::Off => {
                 if let Some((tool, radius)) = self.tool
                     && tool != 0
@@ -538,6 +544,38 @@ impl<'a> MachineChecks<'a> {
         });
         if let Some(message) = why {
             self.error(report, op.loc, message);
+        }
+    }
+
+    /// A rigid tap: the spindle must measure its angle and turn, and the axes must follow
+    /// the pitch at its speed and through its ramps.
+    fn rigid_tap(&self, op: &Op, report: &mut TestRunReport) {
+        let why =
+            self.angle_refusal("tap rigidly").or_else(
+                || match crate::runtime::tap::TapProfile::new(&op.kind, self.rpm, self.config) {
+                    Some(Err(e)) => Some(e),
+                    _ => None,
+                },
+            );
+        if let Some(message) = why {
+            self.error(report, op.loc, message);
+        }
+    }
+
+    /// Why the machine's spindle cannot `what` (it measures no angle), if it cannot.
+    fn angle_refusal(&self, what: &str) -> Option<String> {
+        use crate::config::SpindleBackendConfig;
+        match self.config.spindle.as_ref().map(|s| &s.backend) {
+            None => Some(format!("this machine has no spindle: it cannot {what}")),
+            Some(SpindleBackendConfig::Modbus(_)) => Some(format!(
+                "the spindle is a Modbus VFD, which measures no spindle angle: it cannot \
+                 {what} (that needs a spindle with an encoder)"
+            )),
+            Some(SpindleBackendConfig::Canopen(_)) => Some(format!(
+                "the CANopen spindle drive's position (0x6064) is not read yet: it cannot \
+                 {what} (that needs a spindle whose angle klar measures)"
+            )),
+            Some(SpindleBackendConfig::Sim(_)) => None,
         }
     }
 

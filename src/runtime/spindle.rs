@@ -105,7 +105,7 @@ impl Run<'_, '_> {
 
     /// Holds the axes until the spindle reports at-speed for its present command, at most
     /// `timeout` s; `late` words the error from the measured speed.
-    fn wait_at_speed(
+    pub(super) fn wait_at_speed(
         &mut self,
         loc: SourceLoc,
         timeout: f64,
