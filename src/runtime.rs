@@ -31,6 +31,7 @@ mod events;
 pub mod guard;
 mod log;
 mod operator;
+mod per_rev;
 mod reader;
 mod settle;
 mod spindle;
@@ -222,6 +223,8 @@ pub struct Run<'a, 'w> {
     sync: Option<sync::SyncPass>,
     /// A rigid tap geared to the spindle (idle between taps).
     tap: tap::TapPass,
+    /// Feed per revolution following the measured spindle speed.
+    warp: per_rev::RevWarp,
 }
 
 impl Run<'_, '_> {
@@ -629,6 +632,7 @@ impl<'a, 'w> Run<'a, 'w> {
             operator_seen: StopLevel::None,
             sync: None,
             tap: tap::TapPass::idle(64),
+            warp: per_rev::RevWarp::new(),
             log,
             deferred: None,
         };
@@ -686,7 +690,7 @@ impl<'a, 'w> Run<'a, 'w> {
                 .settle_all()
                 .and_then(|()| self.settle_end())
                 .map(|()| false),
-            Some(Step::Sample(sample)) => self.apply_sample(&sample).map(|()| true),
+            Some(Step::Sample(sample)) => self.warped_sample(sample).map(|()| true),
             // While stopping, events (spindle, stops) of blocks not reached are not executed.
             Some(Step::Event(op)) if self.stopping.is_some() => {
                 self.reader.give_back(op);
@@ -734,6 +738,15 @@ impl<'a, 'w> Run<'a, 'w> {
     /// The report of the stop that ended the run, once it is at rest.
     pub fn stop_report(&self) -> Option<&StopReport> {
         self.stop_report.as_ref()
+    }
+
+    /// Tells the spindle the chip cross-section the tool cuts now, mm² (0 out of the cut):
+    /// a simulated spindle slows by its `load_droop` (for tests, or a process model that
+    /// knows the cut).
+    pub fn set_spindle_load(&mut self, section_mm2: f64) {
+        if let Some(s) = self.io.spindle_mut() {
+            s.set_load(section_mm2);
+        }
     }
 
     /// The simulated axes of the machine (fault injection, inspection), if it has any.
@@ -846,8 +859,11 @@ impl<'a, 'w> Run<'a, 'w> {
         while !self.input_done && self.planner.needs_input() {
             match self.reader.next(wait) {
                 None => return false,
-                Some(Feed::Op(op, blocks)) => {
+                Some(Feed::Op(op, blocks, basis)) => {
                     self.blocks = blocks;
+                    if let Some(b) = basis {
+                        self.warp.remember(op.loc, b);
+                    }
                     if let Err(e) = self.planner.push(op) {
                         self.stop_reading(RunError::Motion(e));
                     }

@@ -177,7 +177,7 @@ fn left_hand_thread_enters_in_m4() {
     assert!(c.s[rows[0]] < 0.0, "enters turning M4");
     // Back to M3 after the tap, as at the call.
     let last = *rows.last().unwrap_or(&0);
-    assert!(c.s[last..].iter().any(|&s| s == 500.0));
+    assert!(c.s[last..].contains(&500.0));
 }
 
 #[test]

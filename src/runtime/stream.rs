@@ -42,6 +42,8 @@ pub struct OpStream {
     spindles: Spindles,
     max_rpm: f64,
     path: std::path::PathBuf,
+    /// The basis rpm of the last op given out, when it is fed per main-spindle revolution.
+    basis: Option<f64>,
 }
 
 impl OpStream {
@@ -58,7 +60,15 @@ impl OpStream {
             spindles: Spindles::default(),
             max_rpm,
             path: path.to_path_buf(),
+            basis: None,
         }
+    }
+
+    /// The main-spindle speed (rpm) the last op given out was planned at when it is fed per
+    /// revolution of the main spindle: the run scales its path speed by the measured over
+    /// this speed (see `per_rev.rs`).
+    pub fn per_rev_basis(&self) -> Option<f64> {
+        self.basis
     }
 
     /// Blocks the interpreter executed.
@@ -149,12 +159,33 @@ impl OpStream {
 
     fn resolve(&mut self, mut op: Op) -> Result<Op, RunError> {
         self.track_spindle(&op);
+        self.basis = None;
         let resolved = match &op.kind {
             OpKind::Line { to, feed, .. }
             | OpKind::Arc { to, feed, .. }
             | OpKind::Spline { to, feed, .. } => Some(self.resolve_feed(*feed, to, &op)?),
             _ => None,
         };
+        if let Some(Feed::Rate(r)) = resolved
+            && self.spindles.last == Some(SpindleId::Main)
+            && matches!(
+                &op.kind,
+                OpKind::Line {
+                    feed: Feed::PerRevolution(_),
+                    ..
+                } | OpKind::Arc {
+                    feed: Feed::PerRevolution(_),
+                    ..
+                } | OpKind::Spline {
+                    feed: Feed::PerRevolution(_),
+                    ..
+                }
+            )
+            && let Some(Feed::PerRevolution(f)) = op_feed(&op.kind)
+            && f > 0.0
+        {
+            self.basis = Some(r * 60.0 / f);
+        }
         if let Some(new) = resolved {
             match &mut op.kind {
                 OpKind::Line { feed, .. }
@@ -164,6 +195,16 @@ impl OpStream {
             }
         }
         Ok(op)
+    }
+}
+
+/// The feed of a motion op.
+fn op_feed(kind: &OpKind) -> Option<Feed> {
+    match kind {
+        OpKind::Line { feed, .. } | OpKind::Arc { feed, .. } | OpKind::Spline { feed, .. } => {
+            Some(*feed)
+        }
+        _ => None,
     }
 }
 
