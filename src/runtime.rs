@@ -195,8 +195,9 @@ pub struct Run<'a, 'w> {
     end_windows: Vec<Option<(f64, f64)>>,
     /// Source of the last sample sent.
     last_loc: Option<SourceLoc>,
-    /// Constant surface speed in m/min while G96 is active.
-    surface_speed: Option<f64>,
+    /// Constant surface speed in m/min and its speed limit in rpm (G26; infinite without)
+    /// while G96 is active.
+    surface_speed: Option<(f64, f64)>,
     /// Per machine axis: (max acceleration, max jerk) for quick stops.
     stop_limits: Vec<(f64, f64)>,
     /// Per machine axis: the control's following-error limit.
@@ -373,7 +374,6 @@ impl Run<'_, '_> {
     fn apply_sample(&mut self, sample: &Sample) -> Result<(), RunError> {
         if self.last_loc != Some(sample.loc) {
             self.settle_all()?;
-            self.follow_surface_speed()?;
             self.last_loc = Some(sample.loc);
         }
         self.line = sample.loc.line;
@@ -391,6 +391,8 @@ impl Run<'_, '_> {
         }
         self.command
             .setpoints(sample, &self.commanded, self.io.setpoints_mut());
+        // Constant surface speed follows the radius of this cycle's setpoint.
+        self.follow_surface_speed()?;
         self.servo_cycle(t)
     }
 

@@ -484,7 +484,7 @@ impl<'a> MachineChecks<'a> {
     ) {
         let rpm = match speed {
             SpindleSpeed::Rpm(r) => r,
-            SpindleSpeed::SurfaceSpeed(_) => {
+            SpindleSpeed::SurfaceSpeed(_) | SpindleSpeed::SurfaceSpeedCapped(..) => {
                 // Constant surface speed turns the work; the speed follows the radius and
                 // is limited to the machine's maximum.
                 if dir != SpindleDir::Off
@@ -756,11 +756,13 @@ fn follow(
 }
 
 /// The main spindle's signed speed after a spindle op; under constant surface speed the
-/// machine's highest speed (the worst case for a thread pass).
+/// machine's highest speed or the G26 limit below it (the worst case for a thread pass).
 fn signed_rpm(dir: SpindleDir, speed: SpindleSpeed, config: &MachineConfig) -> f64 {
+    let max = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
     let rpm = match speed {
         SpindleSpeed::Rpm(r) => r,
-        SpindleSpeed::SurfaceSpeed(_) => config.spindle.as_ref().map_or(0.0, |s| s.max_rpm),
+        SpindleSpeed::SurfaceSpeed(_) => max,
+        SpindleSpeed::SurfaceSpeedCapped(_, n) => n.min(max),
     };
     match dir {
         SpindleDir::Off => 0.0,

@@ -304,6 +304,8 @@ pub enum SpindleSpeed {
     Rpm(f64),
     /// Constant cutting speed in m/min (lathe G96).
     SurfaceSpeed(f64),
+    /// Constant cutting speed in m/min (lathe G96) under a speed limit in rpm (G26).
+    SurfaceSpeedCapped(f64, f64),
 }
 
 /// The path shape of an APPR or DEP block (HEIDENHAIN approach/departure functions).
