@@ -1,11 +1,11 @@
-//! Feed per revolution (G95) following the measured spindle speed, read back from the
-//! trace: while the simulated spindle slows under a cut, the tool still advances F per
-//! measured revolution; feed hold and override still act.
+//! Feed per revolution (lathe G95, Klartext M136) following the measured spindle speed,
+//! read back from the trace: while the simulated spindle slows under a cut, the tool still
+//! advances F per measured revolution; feed hold and override still act.
 
 mod common;
 
 use common::{Trace, program};
-use klar::config::MachineConfig;
+use klar::config::{BUILTIN_MILL, MachineConfig};
 use klar::runtime::{Run, RunOptions};
 
 /// Runs `path` on the built-in lathe, putting a chip of `section` mm² on the spindle while
@@ -14,15 +14,32 @@ use klar::runtime::{Run, RunOptions};
 fn run_with_load(
     path: &std::path::Path,
     section: f64,
-    (z_lo, z_hi): (f64, f64),
+    window: (f64, f64),
+    act: impl FnMut(&mut Run<'_, '_>, f64),
+) -> Trace {
+    run_on(
+        &MachineConfig::builtin_lathe(),
+        path,
+        section,
+        (1, window),
+        act,
+    )
+}
+
+/// Runs `path` on `machine`, putting a chip of `section` mm² on the spindle while commanded
+/// axis `axis` (its index) lies in the window; `act` as in [`run_with_load`].
+fn run_on(
+    machine: &MachineConfig,
+    path: &std::path::Path,
+    section: f64,
+    (axis, (z_lo, z_hi)): (usize, (f64, f64)),
     mut act: impl FnMut(&mut Run<'_, '_>, f64),
 ) -> Trace {
-    let machine = MachineConfig::builtin_lathe();
     let mut buf = Vec::new();
     {
         let mut run = Run::start(
             path,
-            &machine,
+            machine,
             RunOptions {
                 realtime: false,
                 trace: Some(&mut buf),
@@ -32,7 +49,7 @@ fn run_with_load(
         let mut loaded = false;
         loop {
             let s = run.status();
-            let z = s.commanded[1];
+            let z = s.commanded[axis];
             let cut = z < z_hi && z > z_lo;
             if cut != loaded {
                 run.set_spindle_load(if cut { section } else { 0.0 });
@@ -158,4 +175,54 @@ fn feed_hold_and_override_still_act_on_a_feed_per_revolution() {
         .filter(|&i| z[i] < -30.0 && z[i] > -40.0 && z[i] == z[i - 1] && a[i] > a[i - 1])
         .count();
     assert!(still > 200, "held for {still} cycles");
+}
+
+#[test]
+fn m136_feeds_the_mill_per_measured_revolution() {
+    // The built-in mill with a spindle that slows under cut like the lathe's.
+    let text = BUILTIN_MILL.replace(
+        "max_rpm = 12000.0",
+        "max_rpm = 12000.0\nbackend = { kind = \"sim\", load_droop = 0.1 }",
+    );
+    let machine = MachineConfig::parse("mill with droop", &text).expect("machine parses");
+    // F0.2 per revolution at S1000 along X from 0 to 30 at Z-2; a chip of 2 mm² from X5 to
+    // X20.
+    let trace = run_on(
+        &machine,
+        &program("feed_per_rev_m136.h"),
+        2.0,
+        (0, (5.0, 20.0)),
+        |_, _| {},
+    );
+    let col = |n: &str| trace.column(n).unwrap_or_else(|| panic!("column {n}"));
+    let (x, z, a) = (col("X"), col("Z"), col("S_deg"));
+    let f = 0.2;
+    let rows: Vec<usize> = (0..x.len())
+        .filter(|&i| x[i] > 1.0 && x[i] < 29.0 && (z[i] + 2.0).abs() < 1e-9)
+        .collect();
+    assert!(rows.len() > 1000);
+    let speeds: Vec<f64> = rows
+        .iter()
+        .map(|&i| (a[i] - a[i - 10]) / 0.010 / 6.0)
+        .collect();
+    let slow = speeds.iter().copied().fold(f64::INFINITY, f64::min);
+    let fast = speeds.iter().copied().fold(0.0, f64::max);
+    assert!(slow < 830.0, "the spindle dips: {slow} rpm");
+    let tol = f * 2.0 / 4096.0 + f / 60.0 * 0.001 * (fast - slow);
+    let mut worst: f64 = 0.0;
+    let mut j = rows[0];
+    let last = *rows.last().unwrap_or(&0);
+    for &i in &rows {
+        while j <= last && a[j] - a[i] < 360.0 {
+            j += 1;
+        }
+        if j > last {
+            break;
+        }
+        worst = worst.max(((x[j] - x[i]) - f * (a[j] - a[i]) / 360.0).abs());
+    }
+    assert!(
+        worst < tol,
+        "X per revolution off by {worst} mm (tolerance {tol})"
+    );
 }

@@ -231,7 +231,7 @@ pub enum CornerRule {
 /// cannot define them as machine functions.
 pub const BUILT_IN_M_NUMBERS: &[u32] = &[
     0, 1, 2, 3, 4, 5, 6, 8, 9, 13, 14, 30, 89, 91, 92, 97, 98, 99, 116, 117, 126, 127, 128, 129,
-    140,
+    136, 137, 140,
 ];
 
 /// Highest M number a machine function may have.
