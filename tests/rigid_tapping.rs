@@ -219,3 +219,26 @@ fn check_refuses_a_pitch_the_tool_axis_cannot_follow() {
         report.errors
     );
 }
+
+#[test]
+fn lathe_g36_on_the_turning_axis_is_geared_to_the_main_spindle() {
+    let machine = MachineConfig::builtin_lathe();
+    let (result, trace) = run(&program("lathe/tapping_g36.nc"), &machine);
+    result.expect("the lathe tapping program runs");
+    let c = cols(&trace);
+    // M8 x 1.25 at S400 from ZS2 to ZE-12 on X0 (the lathe's X column is the radius).
+    let (safe, pitch, depth) = (2.0, 1.25, -12.0);
+    let (rows, a0) = tap_rows(&c, 0.0, safe);
+    let cmd = lead_error(&c.z, &c.angle, &rows, safe, a0, pitch);
+    let act = lead_error(&c.z_act, &c.angle, &rows, safe, a0, pitch);
+    assert!(cmd < 0.005, "commanded lead error {cmd} mm");
+    assert!(act < 0.005, "measured lead error {act} mm");
+    let rev = reversals(&c, &rows);
+    assert_eq!(rev.len(), 1, "{rev:?}");
+    assert!(
+        (rev[0].0 - depth).abs() < 0.005,
+        "reversed at Z {}",
+        rev[0].0
+    );
+    assert!((rev[0].1 - depth).abs() < 0.005, "measured {}", rev[0].1);
+}
