@@ -7,7 +7,7 @@ use super::testutil::{
 use crate::cycles::{CycleContext, CycleError, CycleFeed, Move, ParamKey, generate};
 use crate::op::SpindleDir;
 
-use CycleFeed::{PerRev, Rapid, Rate};
+use CycleFeed::{Rapid, Rate};
 
 fn run(n: u32, d: &Defs, ctx: &CycleContext) -> Result<Vec<Move>, CycleError> {
     let mut out = Vec::new();
