@@ -48,7 +48,7 @@ use crate::testrun::positioning_axes;
 use crate::trace::{SpindleRow, TraceWriter};
 use command::CommandPath;
 pub use error::RunError;
-use klar_interp::{AxisLetter, SourceLoc};
+use klar_interp::{AxisLetter, OpKind, SourceLoc};
 use klar_motion::{AxisFault, Planner, Sample, Step};
 use log::{LogQueue, LogRecord};
 pub use operator::{OperatorStop, StopLevel};
@@ -863,8 +863,11 @@ impl<'a, 'w> Run<'a, 'w> {
                 None => return false,
                 Some(Feed::Op(op, blocks, basis)) => {
                     self.blocks = blocks;
-                    if let Some(b) = basis {
-                        self.warp.remember(op.loc, b);
+                    if matches!(
+                        op.kind,
+                        OpKind::Line { .. } | OpKind::Arc { .. } | OpKind::Spline { .. }
+                    ) {
+                        self.warp.remember(op.loc, basis);
                     }
                     if let Err(e) = self.planner.push(op) {
                         self.stop_reading(RunError::Motion(e));
