@@ -144,17 +144,18 @@ impl Run<'_, '_> {
     pub(super) fn warped_sample(&mut self, sample: Sample) -> Result<(), RunError> {
         let basis = self.warp.basis(sample.loc);
         let on_plan = self.warp.pos == 0.0;
-        match self.warp.prev {
-            // Not fed per revolution and on the plan, or at rest (where a fraction behind
-            // the plan is dropped): as planned.
-            Some(prev) if basis.is_some() && !(prev.pose == sample.pose && !on_plan) => {}
-            Some(prev) if !on_plan && prev.pose != sample.pose => {}
-            _ => {
-                self.warp.older = self.warp.prev;
-                self.warp.prev = Some(sample);
-                self.warp.pos = 0.0;
-                return self.apply_sample(&sample);
-            }
+        let warped = match self.warp.prev {
+            None => false,
+            // At rest a fraction behind the plan is dropped.
+            Some(prev) if prev.pose == sample.pose => on_plan && basis.is_some(),
+            // Fed per revolution, or behind the plan since such a move.
+            Some(_) => basis.is_some() || !on_plan,
+        };
+        if !warped {
+            self.warp.older = self.warp.prev;
+            self.warp.prev = Some(sample);
+            self.warp.pos = 0.0;
+            return self.apply_sample(&sample);
         }
         let (Some(prev), older) = (self.warp.prev, self.warp.older) else {
             return Ok(());
