@@ -33,6 +33,9 @@ use klar_interp::{Op, OpKind, Pose, SourceLoc};
 /// Time constant of the spindle's approach to a stroke's end over its last degrees, s.
 pub(crate) const SETTLE_TIME: f64 = 0.01;
 
+/// The measured speed below which the spindle counts as at rest before a tap, rpm.
+const STILL_RPM: f64 = 1.0;
+
 /// Share of the spindle's ramp rate the approach to a stroke's end plans with.
 const RAMP_SHARE: f64 = 0.5;
 
@@ -365,7 +368,9 @@ impl Run<'_, '_> {
         }
         let k = match self.tap.phase {
             Phase::Stopping => {
-                let still = rpm.abs() < 1e-9
+                // At rest: measured below STILL_RPM and at its command of 0 as the spindle
+                // reports it; from here the tool follows whatever the spindle does.
+                let still = rpm.abs() <= STILL_RPM
                     && self.io.spindle_mut().is_some_and(|s| s.feedback().at_speed);
                 if !still {
                     return self.hold_cycle();
