@@ -181,21 +181,9 @@ impl OpStream {
             }
             _ => None,
         };
+        // Fed per revolution of the main spindle: the rpm the rate was planned at.
         if let Some(Feed::Rate(r)) = resolved
             && self.spindles.last == Some(SpindleId::Main)
-            && matches!(
-                &op.kind,
-                OpKind::Line {
-                    feed: Feed::PerRevolution(_),
-                    ..
-                } | OpKind::Arc {
-                    feed: Feed::PerRevolution(_),
-                    ..
-                } | OpKind::Spline {
-                    feed: Feed::PerRevolution(_),
-                    ..
-                }
-            )
             && let Some(Feed::PerRevolution(f)) = op_feed(&op.kind)
             && f > 0.0
         {
