@@ -231,3 +231,23 @@ fn m136_feeds_the_mill_per_measured_revolution() {
         "X per revolution off by {worst} mm (tolerance {tol})"
     );
 }
+
+#[test]
+fn a_spindle_fault_in_a_feed_per_revolution_stops_the_path_and_says_so() {
+    // The simulated spindle faults 2 s into the run, inside the G95 cut.
+    let text = format!(
+        "{}\n[[fault]]\nkind = \"spindle\"\nat = 2.0\n",
+        klar::config::BUILTIN_LATHE
+    );
+    let machine = MachineConfig::parse("lathe with a spindle fault", &text).expect("parses");
+    let (result, trace) = common::run(&program("lathe/feed_per_rev.nc"), &machine);
+    let failure = result.expect_err("the fault stops the run");
+    assert!(
+        matches!(failure.error, klar::runtime::RunError::Spindle { .. }),
+        "{}",
+        failure.error
+    );
+    // Stopped on the path soon after the fault, not after a wait for the spindle.
+    let end = trace.t.last().copied().unwrap_or(0.0);
+    assert!(end < 3.0, "ended at {end} s");
+}

@@ -12,7 +12,8 @@
 //! `k` is at most 1: a spindle measured faster than commanded does not drive the axes
 //! faster than planned (the planner keeps them within their limits at the basis speed).
 //! A spindle that stands while a move fed per revolution waits for it holds the path there,
-//! for at most the spindle's at-speed timeout.
+//! for at most the spindle's at-speed timeout. Once a stop is under way (a spindle fault, the
+//! operator's stop) the path brakes on the plan's own time.
 //!
 //! Moves not fed per revolution run at `k = 1`, and so do the moves of a block that also
 //! holds moves not fed per revolution (a cycle's rapids and feeds, whose samples carry the
@@ -200,7 +201,8 @@ impl Run<'_, '_> {
     /// Planner periods per servo cycle: the measured over the basis speed of a block fed per
     /// revolution (0 to 1), 1 otherwise.
     fn rev_factor(&mut self, basis: Option<f64>) -> f64 {
-        let Some(basis) = basis.filter(|b| *b > 0.0) else {
+        // A stop under way (a spindle fault, the operator) brakes on the plan's own time.
+        let Some(basis) = basis.filter(|b| *b > 0.0 && self.stopping.is_none()) else {
             return 1.0;
         };
         let Some(s) = self.io.spindle_mut() else {
