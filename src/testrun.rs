@@ -523,21 +523,7 @@ impl<'a> MachineChecks<'a> {
     /// A thread pass: the spindle must measure its angle, turn, and the axes must follow the
     /// pitch at its speed.
     fn spindle_sync(&self, op: &Op, report: &mut TestRunReport) {
-        use crate::config::SpindleBackendConfig;
-        let why = match self.config.spindle.as_ref().map(|s| &s.backend) {
-            None => Some("this machine has no spindle: it cannot cut threads".to_string()),
-            Some(SpindleBackendConfig::Modbus(_)) => Some(
-                "the spindle is a Modbus VFD, which measures no spindle angle: threading \
-                 needs a spindle with an encoder"
-                    .to_string(),
-            ),
-            Some(SpindleBackendConfig::Canopen(_)) => Some(
-                "the CANopen spindle drive's position (0x6064) is not read yet: threading \
-                 needs a spindle whose angle klar measures"
-                    .to_string(),
-            ),
-            Some(SpindleBackendConfig::Sim(_)) => None,
-        };
+        let why = self.angle_refusal("cut threads");
         let why = why.or_else(|| match SyncProfile::new(&op.kind, self.rpm, self.config) {
             Some(Err(e)) => Some(e),
             _ => None,
