@@ -258,7 +258,11 @@ fn run_pipeline(path: &Path, config: &MachineConfig) -> PipelineRun {
                     // A thread pass is geared to the measured spindle angle by the servo loop
                     // (its profile is checked by the test run and tests/lathe_threads.rs): the
                     // planner stops at its start and goes on from its end.
-                    OpKind::SpindleSync { to, .. } => kin.to_machine(to, &mut commanded),
+                    OpKind::SpindleSync { .. } | OpKind::RigidTap { .. } => {
+                        if let Some((_, to)) = op.kind.geared_ends() {
+                            kin.to_machine(&to, &mut commanded);
+                        }
+                    }
                     _ => {}
                 }
                 continue;

@@ -12,7 +12,9 @@ pub fn op_bounds(kind: &OpKind) -> Option<(Pose, Pose)> {
         hi.0[i] = hi.0[i].max(v);
     };
     match kind {
-        OpKind::Line { from, to, .. } | OpKind::SpindleSync { from, to, .. } => {
+        OpKind::Line { from, to, .. }
+        | OpKind::SpindleSync { from, to, .. }
+        | OpKind::RigidTap { from, to, .. } => {
             for i in 0..9 {
                 add(i, from.0[i]);
                 add(i, to.0[i]);

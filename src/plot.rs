@@ -165,6 +165,8 @@ fn flatten(op: &Op) -> Option<(bool, Vec<[f64; 3]>)> {
         OpKind::Line { from, to, feed } => Some((*feed == Feed::Rapid, vec![xyz(from), xyz(to)])),
         // A thread pass is a feed move along its line.
         OpKind::SpindleSync { from, to, .. } => Some((false, vec![xyz(from), xyz(to)])),
+        // A rigid tap: down to the bottom and back along the hole's axis.
+        OpKind::RigidTap { from, to, .. } => Some((false, vec![xyz(from), xyz(to), xyz(from)])),
         OpKind::Arc {
             from,
             to,

@@ -31,12 +31,14 @@ mod events;
 pub mod guard;
 mod log;
 mod operator;
+mod per_rev;
 mod reader;
 mod settle;
 mod spindle;
 mod stop;
 pub mod stream;
 pub(crate) mod sync;
+pub(crate) mod tap;
 
 use crate::config::MachineConfig;
 use crate::latency::Pacer;
@@ -46,7 +48,7 @@ use crate::testrun::positioning_axes;
 use crate::trace::{SpindleRow, TraceWriter};
 use command::CommandPath;
 pub use error::RunError;
-use klar_interp::{AxisLetter, SourceLoc};
+use klar_interp::{AxisLetter, OpKind, SourceLoc};
 use klar_motion::{AxisFault, Planner, Sample, Step};
 use log::{LogQueue, LogRecord};
 pub use operator::{OperatorStop, StopLevel};
@@ -193,8 +195,9 @@ pub struct Run<'a, 'w> {
     end_windows: Vec<Option<(f64, f64)>>,
     /// Source of the last sample sent.
     last_loc: Option<SourceLoc>,
-    /// Constant surface speed in m/min while G96 is active.
-    surface_speed: Option<f64>,
+    /// Constant surface speed in m/min and its speed limit in rpm (G26; infinite without)
+    /// while G96 is active.
+    surface_speed: Option<(f64, f64)>,
     /// Per machine axis: (max acceleration, max jerk) for quick stops.
     stop_limits: Vec<(f64, f64)>,
     /// Per machine axis: the control's following-error limit.
@@ -219,6 +222,10 @@ pub struct Run<'a, 'w> {
     operator_seen: StopLevel,
     /// A pass geared to the spindle under way (a thread pass).
     sync: Option<sync::SyncPass>,
+    /// A rigid tap geared to the spindle (idle between taps).
+    tap: tap::TapPass,
+    /// Feed per revolution following the measured spindle speed.
+    warp: per_rev::RevWarp,
 }
 
 impl Run<'_, '_> {
@@ -367,7 +374,6 @@ impl Run<'_, '_> {
     fn apply_sample(&mut self, sample: &Sample) -> Result<(), RunError> {
         if self.last_loc != Some(sample.loc) {
             self.settle_all()?;
-            self.follow_surface_speed()?;
             self.last_loc = Some(sample.loc);
         }
         self.line = sample.loc.line;
@@ -385,6 +391,8 @@ impl Run<'_, '_> {
         }
         self.command
             .setpoints(sample, &self.commanded, self.io.setpoints_mut());
+        // Constant surface speed follows the radius of this cycle's setpoint.
+        self.follow_surface_speed()?;
         self.servo_cycle(t)
     }
 
@@ -625,6 +633,8 @@ impl<'a, 'w> Run<'a, 'w> {
             operator: None,
             operator_seen: StopLevel::None,
             sync: None,
+            tap: tap::TapPass::idle(64),
+            warp: per_rev::RevWarp::new(),
             log,
             deferred: None,
         };
@@ -640,9 +650,14 @@ impl<'a, 'w> Run<'a, 'w> {
         if self.stop_report.is_some() {
             return Err(RunError::Stopped { line: self.line });
         }
-        if self.sync.is_some() {
+        if self.sync.is_some() || self.tap.active() {
             // Inside a geared pass neither hold nor stop acts: the pass runs to its end.
-            return match self.sync_step() {
+            let geared = if self.tap.active() {
+                self.tap_step()
+            } else {
+                self.sync_step()
+            };
+            return match geared {
                 Ok(()) => Ok(true),
                 Err(
                     e @ (RunError::Fault { .. } | RunError::Backend(_) | RunError::Setpoint { .. }),
@@ -677,7 +692,7 @@ impl<'a, 'w> Run<'a, 'w> {
                 .settle_all()
                 .and_then(|()| self.settle_end())
                 .map(|()| false),
-            Some(Step::Sample(sample)) => self.apply_sample(&sample).map(|()| true),
+            Some(Step::Sample(sample)) => self.warped_sample(sample).map(|()| true),
             // While stopping, events (spindle, stops) of blocks not reached are not executed.
             Some(Step::Event(op)) if self.stopping.is_some() => {
                 self.reader.give_back(op);
@@ -725,6 +740,15 @@ impl<'a, 'w> Run<'a, 'w> {
     /// The report of the stop that ended the run, once it is at rest.
     pub fn stop_report(&self) -> Option<&StopReport> {
         self.stop_report.as_ref()
+    }
+
+    /// Tells the spindle the chip cross-section the tool cuts now, mm² (0 out of the cut):
+    /// a simulated spindle slows by its `load_droop` (for tests, or a process model that
+    /// knows the cut).
+    pub fn set_spindle_load(&mut self, section_mm2: f64) {
+        if let Some(s) = self.io.spindle_mut() {
+            s.set_load(section_mm2);
+        }
     }
 
     /// The simulated axes of the machine (fault injection, inspection), if it has any.
@@ -837,8 +861,14 @@ impl<'a, 'w> Run<'a, 'w> {
         while !self.input_done && self.planner.needs_input() {
             match self.reader.next(wait) {
                 None => return false,
-                Some(Feed::Op(op, blocks)) => {
+                Some(Feed::Op(op, blocks, basis)) => {
                     self.blocks = blocks;
+                    if matches!(
+                        op.kind,
+                        OpKind::Line { .. } | OpKind::Arc { .. } | OpKind::Spline { .. }
+                    ) {
+                        self.warp.remember(op.loc, basis);
+                    }
                     if let Err(e) = self.planner.push(op) {
                         self.stop_reading(RunError::Motion(e));
                     }

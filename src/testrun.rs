@@ -381,6 +381,12 @@ impl<'a> MachineChecks<'a> {
                 self.widen(&op, report);
                 self.spindle_sync(&op, report);
             }
+            OpKind::RigidTap { .. } => {
+                report.motion_ops += 1;
+                report.geared_ops += 1;
+                self.widen(&op, report);
+                self.rigid_tap(&op, report);
+            }
             OpKind::RadiusComp { side } if *side != klar_interp::CompSide::Off => {
                 if let Some((tool, radius)) = self.tool
                     && tool != 0
@@ -478,7 +484,7 @@ impl<'a> MachineChecks<'a> {
     ) {
         let rpm = match speed {
             SpindleSpeed::Rpm(r) => r,
-            SpindleSpeed::SurfaceSpeed(_) => {
+            SpindleSpeed::SurfaceSpeed(_) | SpindleSpeed::SurfaceSpeedCapped(..) => {
                 // Constant surface speed turns the work; the speed follows the radius and
                 // is limited to the machine's maximum.
                 if dir != SpindleDir::Off
@@ -517,27 +523,45 @@ impl<'a> MachineChecks<'a> {
     /// A thread pass: the spindle must measure its angle, turn, and the axes must follow the
     /// pitch at its speed.
     fn spindle_sync(&self, op: &Op, report: &mut TestRunReport) {
-        use crate::config::SpindleBackendConfig;
-        let why = match self.config.spindle.as_ref().map(|s| &s.backend) {
-            None => Some("this machine has no spindle: it cannot cut threads".to_string()),
-            Some(SpindleBackendConfig::Modbus(_)) => Some(
-                "the spindle is a Modbus VFD, which measures no spindle angle: threading \
-                 needs a spindle with an encoder"
-                    .to_string(),
-            ),
-            Some(SpindleBackendConfig::Canopen(_)) => Some(
-                "the CANopen spindle drive's position (0x6064) is not read yet: threading \
-                 needs a spindle whose angle klar measures"
-                    .to_string(),
-            ),
-            Some(SpindleBackendConfig::Sim(_)) => None,
-        };
+        let why = self.angle_refusal("cut threads");
         let why = why.or_else(|| match SyncProfile::new(&op.kind, self.rpm, self.config) {
             Some(Err(e)) => Some(e),
             _ => None,
         });
         if let Some(message) = why {
             self.error(report, op.loc, message);
+        }
+    }
+
+    /// A rigid tap: the spindle must measure its angle and turn, and the axes must follow
+    /// the pitch at its speed and through its ramps.
+    fn rigid_tap(&self, op: &Op, report: &mut TestRunReport) {
+        let why =
+            self.angle_refusal("tap rigidly").or_else(
+                || match crate::runtime::tap::TapProfile::new(&op.kind, self.rpm, self.config) {
+                    Some(Err(e)) => Some(e),
+                    _ => None,
+                },
+            );
+        if let Some(message) = why {
+            self.error(report, op.loc, message);
+        }
+    }
+
+    /// Why the machine's spindle cannot `what` (it measures no angle), if it cannot.
+    fn angle_refusal(&self, what: &str) -> Option<String> {
+        use crate::config::SpindleBackendConfig;
+        match self.config.spindle.as_ref().map(|s| &s.backend) {
+            None => Some(format!("this machine has no spindle: it cannot {what}")),
+            Some(SpindleBackendConfig::Modbus(_)) => Some(format!(
+                "the spindle is a Modbus VFD, which measures no spindle angle: it cannot \
+                 {what} (that needs a spindle with an encoder)"
+            )),
+            Some(SpindleBackendConfig::Canopen(_)) => Some(format!(
+                "the CANopen spindle drive's position (0x6064) is not read yet: it cannot \
+                 {what} (that needs a spindle whose angle klar measures)"
+            )),
+            Some(SpindleBackendConfig::Sim(_)) => None,
         }
     }
 
@@ -718,11 +742,13 @@ fn follow(
 }
 
 /// The main spindle's signed speed after a spindle op; under constant surface speed the
-/// machine's highest speed (the worst case for a thread pass).
+/// machine's highest speed or the G26 limit below it (the worst case for a thread pass).
 fn signed_rpm(dir: SpindleDir, speed: SpindleSpeed, config: &MachineConfig) -> f64 {
+    let max = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
     let rpm = match speed {
         SpindleSpeed::Rpm(r) => r,
-        SpindleSpeed::SurfaceSpeed(_) => config.spindle.as_ref().map_or(0.0, |s| s.max_rpm),
+        SpindleSpeed::SurfaceSpeed(_) => max,
+        SpindleSpeed::SurfaceSpeedCapped(_, n) => n.min(max),
     };
     match dir {
         SpindleDir::Off => 0.0,

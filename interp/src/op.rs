@@ -231,7 +231,7 @@ pub enum CornerRule {
 /// cannot define them as machine functions.
 pub const BUILT_IN_M_NUMBERS: &[u32] = &[
     0, 1, 2, 3, 4, 5, 6, 8, 9, 13, 14, 30, 89, 91, 92, 97, 98, 99, 116, 117, 126, 127, 128, 129,
-    140,
+    136, 137, 140,
 ];
 
 /// Highest M number a machine function may have.
@@ -304,6 +304,8 @@ pub enum SpindleSpeed {
     Rpm(f64),
     /// Constant cutting speed in m/min (lathe G96).
     SurfaceSpeed(f64),
+    /// Constant cutting speed in m/min (lathe G96) under a speed limit in rpm (G26).
+    SurfaceSpeedCapped(f64, f64),
 }
 
 /// The path shape of an APPR or DEP block (HEIDENHAIN approach/departure functions).
@@ -575,6 +577,28 @@ pub enum OpKind {
         /// simulated spindle's load.
         section: f64,
     },
+    /// Rigid tapping position-locked to the main spindle's measured angle: the tool moves
+    /// along the line from `from` towards `to` by `pitch` mm per spindle revolution, in
+    /// strokes. Each stroke ends at a depth of `strokes` (mm from `from` along the line);
+    /// a stroke deeper than the one before turns the spindle in `hand`, a shallower one the
+    /// other way, and the tool follows the spindle through every stop and reversal. The
+    /// spindle starts from rest with the tool and ends at rest at the end of the last
+    /// stroke; retracting strokes turn `retract_factor` times faster. The planner stops
+    /// exactly at `from` first; the tool ends at the depth of the last stroke.
+    RigidTap {
+        /// Start on the hole's axis (the set-up clearance).
+        from: Pose,
+        /// Bottom of the thread.
+        to: Pose,
+        /// Thread pitch, mm per revolution (positive).
+        pitch: f64,
+        /// Direction of rotation that enters the thread (M3 right-hand, M4 left-hand).
+        hand: SpindleDir,
+        /// The depths the strokes end at, mm from `from`, in order.
+        strokes: Vec<f64>,
+        /// Spindle speed factor of the retracting strokes.
+        retract_factor: f64,
+    },
     /// Program stop (M0, STOP) or optional stop (M1): motion halts until resumed.
     Stop {
         /// True for M1 (only when optional stop is switched on).
@@ -590,6 +614,30 @@ impl OpKind {
     /// 1 µm of it, a spline with turned coefficients; ops without points unchanged.
     pub fn in_workpiece(&self, rotation: &[[f64; 3]; 3]) -> Vec<OpKind> {
         crate::tnc::plane_output::tilt_kind(rotation, self)
+    }
+
+    /// For an op the servo loop runs geared to the spindle ([`OpKind::SpindleSync`],
+    /// [`OpKind::RigidTap`]): where it starts and where it leaves the tool.
+    pub fn geared_ends(&self) -> Option<(Pose, Pose)> {
+        match self {
+            OpKind::SpindleSync { from, to, .. } => Some((*from, *to)),
+            OpKind::RigidTap {
+                from, to, strokes, ..
+            } => {
+                let len = (0..9)
+                    .map(|i| (to.0[i] - from.0[i]).powi(2))
+                    .sum::<f64>()
+                    .sqrt();
+                let last = strokes.last().copied().unwrap_or(0.0);
+                let k = if len > 0.0 { last / len } else { 0.0 };
+                let mut end = *from;
+                for i in 0..9 {
+                    end.0[i] = from.0[i] + (to.0[i] - from.0[i]) * k;
+                }
+                Some((*from, end))
+            }
+            _ => None,
+        }
     }
 
     /// True for ops that move axes.

@@ -121,7 +121,8 @@ fn turning_program_halves_x_and_puts_arcs_in_the_zx_plane() {
         == OpKind::Spindle {
             spindle: SpindleId::Main,
             dir: SpindleDir::Ccw,
-            speed: SpindleSpeed::SurfaceSpeed(180.0)
+            // G96 S180 under the G26 S3000 limit
+            speed: SpindleSpeed::SurfaceSpeedCapped(180.0, 3000.0)
         }));
     let motion: Vec<&OpKind> = ops
         .iter()

@@ -16,6 +16,7 @@ impl Run<'_, '_> {
                 speed,
             } => self.spindle_command(op.loc, *dir, *speed),
             OpKind::SpindleSync { .. } => self.spindle_sync(op),
+            OpKind::RigidTap { .. } => self.rigid_tap(op),
             OpKind::Tcpm { .. } => {
                 self.command.event(op);
                 Ok(())

@@ -26,8 +26,9 @@ pub const QUEUE_OPS: usize = 1024;
 /// One item from the reader, each with the blocks the interpreter had executed by then.
 #[derive(Debug)]
 pub enum Feed {
-    /// The next op for the planner.
-    Op(Op, u64),
+    /// The next op for the planner, and its basis rpm when it is fed per revolution of the
+    /// main spindle ([`OpStream::per_rev_basis`]).
+    Op(Op, u64, Option<f64>),
     /// The program cannot go on: report this once the motion before it is done.
     Error(RunError, u64),
     /// The program has ended.
@@ -104,9 +105,10 @@ fn read(mut ops: OpStream, checks: &OpChecks, tx: &SyncSender<Feed>, returned: &
             None => Ok(None),
         };
         let blocks = ops.blocks_executed();
+        let basis = ops.per_rev_basis();
         let sent = match next {
             Ok(Some(op)) => planner_ops(op, &checks.letters, &checks.positioning)
-                .all(|op| tx.send(Feed::Op(op, blocks)).is_ok()),
+                .all(|op| tx.send(Feed::Op(op, blocks, basis)).is_ok()),
             Ok(None) => {
                 let _ = tx.send(Feed::End(blocks));
                 false

@@ -13,25 +13,29 @@ use super::{Run, RunError};
 use klar_interp::op::{SpindleDir, SpindleSpeed};
 use klar_interp::{AxisLetter, SourceLoc};
 
+/// The smallest change of the speed constant surface speed commands, rpm.
+pub(super) const CSS_STEP: f64 = 0.1;
+
 impl Run<'_, '_> {
     /// The main spindle speed for constant surface speed `v` (m/min) at the tool's present
-    /// radius (program X), limited to the machine's maximum.
-    pub(super) fn surface_speed_rpm(&mut self, v: f64) -> f64 {
+    /// radius (program X), limited to `limit` (G26) and the machine's maximum.
+    pub(super) fn surface_speed_rpm(&mut self, v: f64, limit: f64) -> f64 {
         let radius = self.command.kinematics().to_program(&self.commanded)[AxisLetter::X];
         let max = self.io.spindle_mut().map_or(0.0, |s| s.max_rpm);
-        OpStream::surface_speed_rpm(v, radius, max)
+        OpStream::surface_speed_rpm(v, radius, max.min(limit))
     }
 
-    /// Under constant surface speed, follows the tool's radius block by block (without
-    /// waiting: the spindle changes speed while the axes move, as on a lathe).
+    /// Under constant surface speed, follows the tool's radius every servo cycle (without
+    /// waiting: the spindle changes speed while the axes move, as on a lathe); a change
+    /// below [`CSS_STEP`] rpm is not sent.
     pub(super) fn follow_surface_speed(&mut self) -> Result<(), RunError> {
-        let Some(v) = self.surface_speed else {
+        let Some((v, limit)) = self.surface_speed else {
             return Ok(());
         };
-        let rpm = self.surface_speed_rpm(v);
+        let rpm = self.surface_speed_rpm(v, limit);
         if let Some(s) = self.io.spindle_mut() {
             let now = s.commanded();
-            if now != 0.0 && (rpm - now.abs()).abs() > 0.01 * now.abs() {
+            if now != 0.0 && (rpm - now.abs()).abs() > CSS_STEP {
                 s.command(rpm.copysign(now))?;
             }
         }
@@ -50,8 +54,12 @@ impl Run<'_, '_> {
                 r
             }
             SpindleSpeed::SurfaceSpeed(v) => {
-                self.surface_speed = (dir != SpindleDir::Off).then_some(v);
-                self.surface_speed_rpm(v)
+                self.surface_speed = (dir != SpindleDir::Off).then_some((v, f64::INFINITY));
+                self.surface_speed_rpm(v, f64::INFINITY)
+            }
+            SpindleSpeed::SurfaceSpeedCapped(v, n) => {
+                self.surface_speed = (dir != SpindleDir::Off).then_some((v, n));
+                self.surface_speed_rpm(v, n)
             }
         };
         let signed = match dir {
@@ -105,7 +113,7 @@ impl Run<'_, '_> {
 
     /// Holds the axes until the spindle reports at-speed for its present command, at most
     /// `timeout` s; `late` words the error from the measured speed.
-    fn wait_at_speed(
+    pub(super) fn wait_at_speed(
         &mut self,
         loc: SourceLoc,
         timeout: f64,

@@ -23,8 +23,9 @@ use std::collections::VecDeque;
 struct Spindles {
     /// Main spindle: programmed rpm (0 when stopped).
     main_rpm: f64,
-    /// Main spindle: constant surface speed in m/min, when G96 is active.
-    surface_speed: Option<f64>,
+    /// Main spindle: constant surface speed in m/min and the speed limit (G26, else the
+    /// machine's maximum), when G96 is active.
+    surface_speed: Option<(f64, f64)>,
     /// Driven tool: programmed rpm (0 when stopped).
     driven_rpm: f64,
     /// Which spindle turned last: feeds per revolution refer to it.
@@ -42,6 +43,8 @@ pub struct OpStream {
     spindles: Spindles,
     max_rpm: f64,
     path: std::path::PathBuf,
+    /// The basis rpm of the last op given out, when it is fed per main-spindle revolution.
+    basis: Option<f64>,
 }
 
 impl OpStream {
@@ -58,7 +61,15 @@ impl OpStream {
             spindles: Spindles::default(),
             max_rpm,
             path: path.to_path_buf(),
+            basis: None,
         }
+    }
+
+    /// The main-spindle speed (rpm) the last op given out was planned at when it is fed per
+    /// revolution of the main spindle: the run scales its path speed by the measured over
+    /// this speed (see `per_rev.rs`).
+    pub fn per_rev_basis(&self) -> Option<f64> {
+        self.basis
     }
 
     /// Blocks the interpreter executed.
@@ -66,7 +77,8 @@ impl OpStream {
         self.interp.blocks_executed()
     }
 
-    /// The spindle speed in rpm for constant surface speed `v` (m/min) at radius `r` (mm).
+    /// The spindle speed in rpm for constant surface speed `v` (m/min) at radius `r` (mm):
+    /// `n = v·1000 / (2π·r)`, limited to `max_rpm` (which it reaches towards the centre).
     pub fn surface_speed_rpm(v: f64, r: f64, max_rpm: f64) -> f64 {
         if r.abs() < 1e-9 {
             return max_rpm;
@@ -88,13 +100,20 @@ impl OpStream {
                     self.spindles.surface_speed = None;
                 }
                 (SpindleId::Main, SpindleSpeed::SurfaceSpeed(v)) => {
-                    self.spindles.surface_speed = Some(*v);
+                    self.spindles.surface_speed = Some((*v, self.max_rpm));
+                    self.spindles.main_rpm = if on { self.max_rpm } else { 0.0 };
+                }
+                (SpindleId::Main, SpindleSpeed::SurfaceSpeedCapped(v, n)) => {
+                    self.spindles.surface_speed = Some((*v, n.min(self.max_rpm)));
                     self.spindles.main_rpm = if on { self.max_rpm } else { 0.0 };
                 }
                 (SpindleId::Driven, SpindleSpeed::Rpm(r)) => {
                     self.spindles.driven_rpm = if on { *r } else { 0.0 };
                 }
-                (SpindleId::Driven, SpindleSpeed::SurfaceSpeed(_)) => {}
+                (
+                    SpindleId::Driven,
+                    SpindleSpeed::SurfaceSpeed(_) | SpindleSpeed::SurfaceSpeedCapped(..),
+                ) => {}
             }
             if on {
                 self.spindles.last = Some(*spindle);
@@ -102,17 +121,21 @@ impl OpStream {
         }
     }
 
-    /// Resolves a feed per revolution into a path feed for a move ending at `to`.
-    fn resolve_feed(&self, feed: Feed, to: &Pose, op: &Op) -> Result<Feed, RunError> {
+    /// Resolves a feed per revolution into a path feed for a move from `from` to `to`.
+    fn resolve_feed(&self, feed: Feed, from: &Pose, to: &Pose, op: &Op) -> Result<Feed, RunError> {
         let Feed::PerRevolution(f) = feed else {
             return Ok(feed);
         };
         let rpm = match self.spindles.last {
             Some(SpindleId::Driven) => self.spindles.driven_rpm,
             Some(SpindleId::Main) => match self.spindles.surface_speed {
-                Some(v) if self.spindles.main_rpm != 0.0 => {
-                    Self::surface_speed_rpm(v, to[AxisLetter::X], self.max_rpm)
-                }
+                // At the smaller radius of the two ends: the fastest the spindle turns on
+                // a line (the run follows the spindle's measured speed below it).
+                Some((v, limit)) if self.spindles.main_rpm != 0.0 => Self::surface_speed_rpm(
+                    v,
+                    from[AxisLetter::X].abs().min(to[AxisLetter::X].abs()),
+                    limit,
+                ),
                 _ => self.spindles.main_rpm,
             },
             None => 0.0,
@@ -149,12 +172,23 @@ impl OpStream {
 
     fn resolve(&mut self, mut op: Op) -> Result<Op, RunError> {
         self.track_spindle(&op);
+        self.basis = None;
         let resolved = match &op.kind {
-            OpKind::Line { to, feed, .. }
-            | OpKind::Arc { to, feed, .. }
-            | OpKind::Spline { to, feed, .. } => Some(self.resolve_feed(*feed, to, &op)?),
+            OpKind::Line { from, to, feed }
+            | OpKind::Arc { from, to, feed, .. }
+            | OpKind::Spline { from, to, feed, .. } => {
+                Some(self.resolve_feed(*feed, from, to, &op)?)
+            }
             _ => None,
         };
+        // Fed per revolution of the main spindle: the rpm the rate was planned at.
+        if let Some(Feed::Rate(r)) = resolved
+            && self.spindles.last == Some(SpindleId::Main)
+            && let Some(Feed::PerRevolution(f)) = op_feed(&op.kind)
+            && f > 0.0
+        {
+            self.basis = Some(r * 60.0 / f);
+        }
         if let Some(new) = resolved {
             match &mut op.kind {
                 OpKind::Line { feed, .. }
@@ -164,6 +198,16 @@ impl OpStream {
             }
         }
         Ok(op)
+    }
+}
+
+/// The feed of a motion op.
+fn op_feed(kind: &OpKind) -> Option<Feed> {
+    match kind {
+        OpKind::Line { feed, .. } | OpKind::Arc { feed, .. } | OpKind::Spline { feed, .. } => {
+            Some(*feed)
+        }
+        _ => None,
     }
 }
 

@@ -368,7 +368,7 @@ impl Run<'_, '_> {
 
     /// One servo cycle commanding `pose` with the velocity feed-forward `velocity`; planner
     /// time stands still (like a hold cycle).
-    fn geared_cycle(
+    pub(super) fn geared_cycle(
         &mut self,
         pose: Pose,
         velocity: [f64; 9],

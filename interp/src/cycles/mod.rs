@@ -59,6 +59,54 @@ pub enum Move {
     Dwell(f64),
     /// Spindle direction change at this point (tapping reversal); the speed stays.
     Spindle(SpindleDir),
+    /// Rigid tapping geared to the spindle from here (the set-up clearance) towards the
+    /// bottom `to` and back: see [`crate::op::OpKind::RigidTap`].
+    RigidTap {
+        /// Bottom of the thread.
+        to: P3,
+        /// Pitch, mm per revolution (positive).
+        pitch: f64,
+        /// Direction of rotation that enters the thread.
+        hand: SpindleDir,
+        /// Distance from here to the surface, mm: infeeds count from the surface.
+        lead_in: f64,
+        /// Infeed per stroke for chip breaking, mm (the whole depth at once when ≥ it).
+        infeed: f64,
+        /// Back-off after each infeed, mm (0: all the way out to the start).
+        back: f64,
+        /// Spindle speed factor of the retraction.
+        retract_factor: f64,
+    },
+}
+
+/// The depths (mm from the start) the strokes of a rigid tap end at, for a thread from
+/// `lead_in` to `depth` below the start: infeeds of `infeed` counted from the surface
+/// (`lead_in`), each but the last followed by a back-off of `back` (0: to the start), and
+/// the way out to the start last.
+pub fn tap_strokes(lead_in: f64, depth: f64, infeed: f64, back: f64) -> Vec<f64> {
+    let mut out = Vec::new();
+    let thread = depth - lead_in;
+    let step = if infeed > 0.0 && infeed < thread {
+        infeed
+    } else {
+        thread.max(0.0)
+    };
+    let mut d = lead_in.min(depth);
+    while d < depth - 1e-9 && step > 0.0 {
+        d = (d + step).min(depth);
+        out.push(d);
+        if d < depth - 1e-9 {
+            out.push(if back > 0.0 { (d - back).max(0.0) } else { 0.0 });
+        }
+        if out.len() > 20_000 {
+            break;
+        }
+    }
+    if out.is_empty() {
+        out.push(depth);
+    }
+    out.push(0.0);
+    out
 }
 
 /// Which parameter of a cycle.

@@ -14,7 +14,9 @@
 //! feeds the first depth P, each further infeed reduced by I but not below J, and after each
 //! infeed retracts by the return distance B (without B: to the start ZS), then moves back at
 //! rapid to the depth reached. Tapping feeds to ZE with the thread pitch F per revolution,
-//! reverses the spindle and feeds back to the start. The linear slot starts at the
+//! reverses the spindle and feeds back to the start; with the driven tool stopped and the
+//! main spindle turning (a tap on the turning axis) it is rigid tapping geared to the main
+//! spindle's measured angle ([`OpKind::RigidTap`]), in and out through the reversal. The linear slot starts at the
 //! position, runs K long at the angle A (face system), and is cut in infeeds of P from ZS to
 //! ZE, going back and forth along the slot.
 
@@ -23,7 +25,7 @@ use std::collections::VecDeque;
 use super::lathe::{Group, Lathe, err_at, num};
 use super::pattern::{CircleLayout, LinearStep, PatternEnd, linear_positions};
 use crate::diag::ProgramError;
-use crate::op::{AxisLetter, Feed, Op, Pose, SourceLoc, SpindleDir};
+use crate::op::{AxisLetter, Feed, Op, OpKind, Pose, SourceLoc, SpindleDir};
 use crate::tnc::exec::ExecError;
 
 /// A G745 pattern waiting for its cycle (or drilling by itself with ZE).
@@ -462,6 +464,23 @@ pub(crate) fn plunge(
                 }
                 step = (step - reduction).max(minimum);
             }
+        }
+        Cycle::Tap { pitch }
+            if lathe.driven_dir == SpindleDir::Off && lathe.main_dir != SpindleDir::Off =>
+        {
+            // On the turning axis with the work turning: rigid tapping geared to the main
+            // spindle, in at its direction and out with it reversed.
+            out.push_back(Op {
+                kind: OpKind::RigidTap {
+                    from: at(s),
+                    to: at(e),
+                    pitch,
+                    hand: lathe.main_dir,
+                    strokes: vec![(e - s).abs(), 0.0],
+                    retract_factor: 1.0,
+                },
+                loc,
+            });
         }
         Cycle::Tap { .. } => {
             lathe.line(at(e), call.feed, loc, out);

@@ -309,7 +309,8 @@ impl DinExec {
                     if let Some(s) = g.get("S") {
                         let v = num(s)?;
                         l.main_speed = match l.main_speed {
-                            SpindleSpeed::SurfaceSpeed(_) => SpindleSpeed::SurfaceSpeed(v),
+                            SpindleSpeed::SurfaceSpeed(_)
+                            | SpindleSpeed::SurfaceSpeedCapped(..) => SpindleSpeed::SurfaceSpeed(v),
                             SpindleSpeed::Rpm(_) => SpindleSpeed::Rpm(v),
                         };
                         main = true;
@@ -485,7 +486,30 @@ impl DinExec {
             }
             Some(18) => {}
             Some(33) => super::thread::g33(l, &mut self.thread, g, loc, out)?,
-            Some(26) => l.speed_limit = g.value("S")?,
+            Some(26) => {
+                // G26 S: the main spindle's speed limit; under constant surface speed the
+                // spindle follows it from here on.
+                let limit = g
+                    .value("S")?
+                    .ok_or((gpos, ProgramError::Missing("G26 needs the speed limit S")))?;
+                if !(limit.is_finite() && limit > 0.0) {
+                    return Err((
+                        g.get("S").map(|w| w.pos as u32).or(gpos),
+                        ProgramError::OutOfRange(format!(
+                            "G26 speed limit S{limit} must be positive"
+                        )),
+                    ));
+                }
+                l.speed_limit = Some(limit);
+                if l.main_dir != SpindleDir::Off
+                    && matches!(l.main_speed, SpindleSpeed::SurfaceSpeed(_))
+                {
+                    out.push_back(Op {
+                        kind: l.main_spindle_op(),
+                        loc,
+                    });
+                }
+            }
             Some(side @ (40..=42)) => {
                 let side = match side {
                     40 => CompSide::Off,

@@ -198,7 +198,10 @@ impl Lathe {
         OpKind::Spindle {
             spindle: SpindleId::Main,
             dir: self.main_dir,
-            speed: self.main_speed,
+            speed: match (self.main_speed, self.speed_limit) {
+                (SpindleSpeed::SurfaceSpeed(v), Some(n)) => SpindleSpeed::SurfaceSpeedCapped(v, n),
+                (speed, _) => speed,
+            },
         }
     }
 

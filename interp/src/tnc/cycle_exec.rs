@@ -681,6 +681,32 @@ impl Machine {
                     }
                 }
                 Move::Dwell(seconds) => OpKind::Dwell { seconds },
+                Move::RigidTap {
+                    to,
+                    pitch,
+                    hand,
+                    lead_in,
+                    infeed,
+                    back,
+                    retract_factor,
+                } => {
+                    let mut bottom = from;
+                    (bottom[a], bottom[b], bottom[n]) = (to[0], to[1], to[2]);
+                    let depth = (0..9)
+                        .map(|i| (bottom.0[i] - from.0[i]).powi(2))
+                        .sum::<f64>()
+                        .sqrt();
+                    let strokes = cycles::tap_strokes(lead_in, depth, infeed, back);
+                    // The tool ends where it started (the last stroke's depth is 0).
+                    OpKind::RigidTap {
+                        from,
+                        to: bottom,
+                        pitch,
+                        hand,
+                        strokes,
+                        retract_factor,
+                    }
+                }
                 Move::Spindle(dir) => {
                     self.spindle = dir;
                     self.spindle_op()

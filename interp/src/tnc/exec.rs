@@ -133,6 +133,10 @@ pub(crate) struct Machine {
     pub(super) feed: Option<f64>,
     /// FAUTO feed from TOOL CALL, mm/s.
     pub(super) fauto: Option<f64>,
+    /// M136: F is in mm per spindle revolution (M137 ends it).
+    pub(super) per_rev: bool,
+    /// The last F programmed under M136, mm per revolution.
+    pub(super) feed_rev: Option<f64>,
     /// Active radius compensation.
     pub(super) comp: CompSide,
     /// Active tool number.
@@ -217,6 +221,8 @@ impl Machine {
             pole: None,
             feed: None,
             fauto: None,
+            per_rev: false,
+            feed_rev: None,
             comp: CompSide::Off,
             tool: None,
             tool_name: None,
@@ -350,10 +356,22 @@ impl Machine {
                         "feed rate F{f} must be positive"
                     ))));
                 }
+                if self.per_rev {
+                    // M136: mm (or inch) per revolution of the spindle.
+                    let mm = f * if self.scale == 1.0 { 1.0 } else { 25.4 };
+                    self.feed_rev = Some(mm);
+                    return Ok(Some(Feed::PerRevolution(mm)));
+                }
                 let mm_s = f * self.feed_scale() / 60.0;
                 self.feed = Some(mm_s);
                 Ok(Some(Feed::Rate(mm_s)))
             }
+            None if self.per_rev => match self.feed_rev {
+                Some(mm) => Ok(Some(Feed::PerRevolution(mm))),
+                None => Err(here(ProgramError::Missing(
+                    "M136 needs a feed F in mm per revolution",
+                ))),
+            },
             None => Ok(self.feed.or(self.fauto).map(Feed::Rate)),
         }
     }

@@ -57,6 +57,8 @@ pub(super) struct MWords {
     tcpm_feed: Option<(Value, u32)>,
     /// M116 (true) / M117.
     rotary_feed: Option<bool>,
+    /// M136 (true) / M137.
+    per_rev: Option<bool>,
     /// Machine functions in the order written (checked against the machine beforehand).
     machine: [u32; MAX_M],
     /// How many of `machine` are used.
@@ -90,6 +92,8 @@ impl MWords {
                 126 | 127 => m.shortest = Some(num == 126),
                 // M116: F on rotary table axes in mm/min at the tool point; M117 ends it
                 116 | 117 => m.rotary_feed = Some(num == 116),
+                // M136: F in mm per spindle revolution from this block on; M137 ends it
+                136 | 137 => m.per_rev = Some(num == 136),
                 // M99: call the last defined cycle after this block's motion (and end M89);
                 // M89: call it after every positioning block from now on
                 99 => {
@@ -139,8 +143,14 @@ impl MWords {
     }
 
     /// Modal switches that already apply to the block's own coordinates and feed (M126/M127,
-    /// M116/M117).
+    /// M116/M117, M136/M137).
     pub(super) fn modal(&self, mc: &mut Machine) {
+        if let Some(on) = self.per_rev {
+            if on != mc.per_rev {
+                mc.feed_rev = None;
+            }
+            mc.per_rev = on;
+        }
         if let Some(on) = self.shortest {
             mc.shortest_rotary = on;
         }

@@ -113,6 +113,21 @@ pub(crate) fn tilt_kind(r: &M3, kind: &OpKind) -> Vec<OpKind> {
                 _ => None,
             })
             .collect(),
+        OpKind::RigidTap {
+            from,
+            to,
+            pitch,
+            hand,
+            strokes,
+            retract_factor,
+        } => vec![OpKind::RigidTap {
+            from: turn(r, from),
+            to: turn(r, to),
+            pitch: *pitch,
+            hand: *hand,
+            strokes: strokes.clone(),
+            retract_factor: *retract_factor,
+        }],
         other => vec![other.clone()],
     }
 }

@@ -363,10 +363,12 @@ impl Compensator {
                 self.route(Trail::Pass(op));
                 Ok(())
             }
-            OpKind::SpindleSync { to, .. } => {
-                // A thread pass is the tool tip's own path: it moves uncompensated, and the
-                // following moves start from its end.
-                self.pos = *to;
+            OpKind::SpindleSync { .. } | OpKind::RigidTap { .. } => {
+                // A thread pass or a rigid tap is the tool tip's own path: it moves
+                // uncompensated, and the following moves start from its end.
+                if let Some((_, to)) = op.kind.geared_ends() {
+                    self.pos = to;
+                }
                 self.route(Trail::Pass(op));
                 Ok(())
             }

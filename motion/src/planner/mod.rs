@@ -415,18 +415,20 @@ impl Planner {
                 self.add_event(op);
                 return Ok(());
             }
-            OpKind::SpindleSync { from, to, .. } => {
+            OpKind::SpindleSync { .. } | OpKind::RigidTap { .. } => {
                 // The servo loop runs the move itself, geared to the spindle: the path stops
                 // exactly at its start, and goes on from its end once the event is done.
-                self.check_start(from, loc)?;
-                if !finite_pose(to) {
+                let Some((from, to)) = op.kind.geared_ends() else {
+                    return Ok(());
+                };
+                self.check_start(&from, loc)?;
+                if !finite_pose(&to) {
                     return Err(MotionError::Discontinuity {
                         loc,
                         axis: AxisLetter::Z,
                         gap: f64::NAN,
                     });
                 }
-                let to = *to;
                 self.flush()?;
                 self.markers.push_back(Marker::Stop {
                     at: self.committed_end,
@@ -631,9 +633,9 @@ impl Planner {
                             self.hold_until = Some((from + dwell, loc));
                         }
                         if let Some(op) = op {
-                            if let OpKind::SpindleSync { to, .. } = &op.kind {
+                            if let Some((_, to)) = op.kind.geared_ends() {
                                 // The servo loop moves the axes to `to` during the event.
-                                self.reframe(*to);
+                                self.reframe(to);
                             }
                             return Some(Step::Event(op));
                         }

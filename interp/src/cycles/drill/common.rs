@@ -471,6 +471,11 @@ impl<'a> Path<'a> {
         self.line([self.pos[0], self.pos[1], t], feed);
     }
 
+    /// Any other move, where the tool stands after it does not change.
+    pub fn push(&mut self, m: Move) {
+        self.out.push(m);
+    }
+
     /// Rapid along the tool axis to `t`.
     pub fn rapid_axis(&mut self, t: f64) {
         self.axis(t, CycleFeed::Rapid);

@@ -45,29 +45,58 @@ pub(super) fn tapping(
 /// tool axis).
 ///
 /// Rapid to the set-up clearance; the sign of the pitch Q239 gives the hand of the thread
-/// (+ right-hand: the tool enters turning clockwise, M3; − left-hand: M4). Tap to the depth
-/// Q201 in one move at one pitch per spindle revolution, reverse the spindle at the bottom
-/// and retract the same way to the set-up clearance. There the spindle returns to the
-/// direction it had at the call (the manual describes this as stopping or reversing again,
-/// depending on version; restoring the call's state covers both); rapid to the 2nd set-up
-/// clearance when that is larger. Needs a programmed spindle speed.
+/// (+ right-hand: the tool enters turning clockwise, M3; − left-hand: M4). From there the
+/// tool axis is geared to the spindle ([`Move::RigidTap`]): spindle and tool start
+/// together, one pitch per revolution down to the depth Q201, where the spindle stops and
+/// reverses with the tool following it, and out the same way to the set-up clearance,
+/// with the spindle turning Q403 times faster on the way out. There the spindle returns to
+/// the direction it had at the call; rapid to the 2nd set-up clearance when that is
+/// larger. Needs a programmed spindle speed.
 ///
-/// Accepted and without effect on the path: Q336 (spindle orientation angle), Q403 (speed
-/// factor for retraction).
+/// Accepted and without effect on the path: Q336 (spindle orientation angle).
 pub(super) fn rigid_tapping(
     p: &Params<'_>,
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
     let c = common(p, 201)?;
-    let (hand, pitch) = thread(p)?;
+    let (hand, pitch, factor) = thread(p)?;
     let Some(c) = c else { return Ok(()) };
     need_speed(p, ctx)?;
-    let feed = CycleFeed::PerRev(pitch);
-    HoleSequence::new(&c, feed)
-        .retract(feed)
-        .run(&mut Path::new(out, ctx.pos), &mut Reversal::new(ctx, hand));
+    geared(&c, ctx, out, hand, pitch, factor, (0.0, 0.0));
     Ok(())
+}
+
+/// The geared tap of 207/209 at one hole: rapid to the set-up clearance, the spindle turned
+/// to the hand of the thread, the strokes (infeed and back-off of `chips`), the spindle back
+/// to the direction of the call, rapid to the 2nd set-up clearance.
+fn geared(
+    c: &super::common::Common,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+    hand: SpindleDir,
+    pitch: f64,
+    retract_factor: f64,
+    (infeed, back): (f64, f64),
+) {
+    let mut path = Path::new(out, ctx.pos);
+    path.rapid_axis(c.safe);
+    if ctx.spindle != hand {
+        path.spindle(hand);
+    }
+    path.push(Move::RigidTap {
+        to: [path.pos[0], path.pos[1], c.hole.at(c.hole.depth)],
+        pitch,
+        hand,
+        lead_in: c.clearance,
+        infeed,
+        back,
+        retract_factor,
+    });
+    if ctx.spindle != hand {
+        path.spindle(ctx.spindle);
+    }
+    path.rapid_axis(c.top);
 }
 
 /// The spindle of a tapping cycle: turned to the hand of the thread at the set-up
@@ -109,21 +138,22 @@ impl HoleSteps for Reversal {
 }
 
 /// Reads the pitch Q239 of a rigid tapping cycle; returns the spindle direction for
-/// entering the thread (the hand) and the pitch magnitude.
-fn thread(p: &Params<'_>) -> Result<(SpindleDir, f64), CycleError> {
+/// entering the thread (the hand), the pitch magnitude and the retraction speed factor
+/// Q403.
+fn thread(p: &Params<'_>) -> Result<(SpindleDir, f64, f64), CycleError> {
     const PITCH: &str = "-99.9999..=99.9999, not 0";
     let pitch = p.req(239, "thread pitch", -99.9999, 99.9999, PITCH)?;
     if pitch == 0.0 {
         return Err(p.range_err(ParamKey::Q(239), pitch, PITCH));
     }
     p.opt(336, 0.0, 0.0, 360.0, "0..=360")?;
-    p.opt(403, 1.0, 0.0001, 10.0, "0.0001..=10")?;
+    let factor = p.opt(403, 1.0, 0.0001, 10.0, "0.0001..=10")?;
     let hand = if pitch > 0.0 {
         SpindleDir::Cw
     } else {
         SpindleDir::Ccw
     };
-    Ok((hand, pitch.abs()))
+    Ok((hand, pitch.abs(), factor))
 }
 
 /// Refuses rigid tapping without a spindle speed: the feed is one pitch per revolution.
@@ -136,12 +166,14 @@ fn need_speed(p: &Params<'_>, ctx: &CycleContext) -> Result<(), CycleError> {
 
 /// Cycle 209 TAPPING WITH CHIP BREAKING (rigid, like 207).
 ///
-/// Rapid to the set-up clearance; tap at one pitch Q239 per revolution (the sign gives the
-/// hand as in 207) by the infeed depth for chip breaking Q257 (0: the whole depth at once);
-/// reverse the spindle and back off by Q256, or, with Q256 = 0, all the way to the set-up
-/// clearance for chip removal; reverse again and tap the next infeed. At the depth Q201
-/// reverse, retract to the set-up clearance, restore the spindle direction of the call
-/// and rapid to the 2nd set-up clearance when that is larger.
+/// Rapid to the set-up clearance; geared to the spindle at one pitch Q239 per revolution
+/// (the sign gives the hand as in 207), tap by the infeed depth for chip breaking Q257
+/// (0: the whole depth at once); the spindle reverses and the tool backs off by Q256, or,
+/// with Q256 = 0, all the way to the set-up clearance for chip removal; the spindle
+/// reverses again and taps the next infeed. At the depth Q201 the spindle reverses and the
+/// tool retracts to the set-up clearance; every retraction turns Q403 times faster. Then
+/// the spindle direction of the call is restored and the tool rapids to the 2nd set-up
+/// clearance when that is larger.
 pub(super) fn tapping_chip_breaking(
     p: &Params<'_>,
     ctx: &CycleContext,
@@ -151,30 +183,13 @@ pub(super) fn tapping_chip_breaking(
     let c = common(p, 201)?;
     let infeed = p.opt(257, 0.0, 0.0, LEN_MAX, LEN)?;
     let back = p.opt(256, 0.0, 0.0, LEN_MAX, LEN)?;
-    let (hand, pitch) = thread(p)?;
+    let (hand, pitch, factor) = thread(p)?;
     let Some(c) = c else { return Ok(()) };
     need_speed(p, ctx)?;
-    let feed = CycleFeed::PerRev(pitch);
+    // The number of infeeds is bounded like every other infeed loop.
     let step = if infeed > 0.0 { infeed } else { c.hole.depth };
-    let depths = infeed_depths(p, 0.0, c.hole.depth, step, 0.0, 0.0)?;
-    let seq = HoleSequence::new(&c, feed).retract(feed);
-    let mut spindle = Reversal::new(ctx, hand);
-    let mut path = Path::new(out, ctx.pos);
-    seq.enter(&mut path, &mut spindle);
-    for (i, &d) in depths.iter().enumerate() {
-        path.axis(c.hole.at(d), feed);
-        if i + 1 == depths.len() {
-            break;
-        }
-        path.spindle(reversed(hand));
-        if back > 0.0 {
-            path.axis(c.hole.at(d - back), feed);
-        } else {
-            path.axis(c.safe, feed);
-        }
-        path.spindle(hand);
-    }
-    seq.finish(&mut path, &mut spindle);
+    infeed_depths(p, 0.0, c.hole.depth, step, 0.0, 0.0)?;
+    geared(&c, ctx, out, hand, pitch, factor, (infeed, back));
     Ok(())
 }
 

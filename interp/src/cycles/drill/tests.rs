@@ -7,7 +7,7 @@ use super::testutil::{
 use crate::cycles::{CycleContext, CycleError, CycleFeed, Move, ParamKey, generate};
 use crate::op::SpindleDir;
 
-use CycleFeed::{PerRev, Rapid, Rate};
+use CycleFeed::{Rapid, Rate};
 
 fn run(n: u32, d: &Defs, ctx: &CycleContext) -> Result<Vec<Move>, CycleError> {
     let mut out = Vec::new();
@@ -331,29 +331,36 @@ fn d207(pitch: f64) -> Defs {
 #[test]
 fn rigid_tapping_207_hand_from_pitch_sign_per_rev_feed() {
     let ctx = ctx_at([3.0, 4.0, 30.0]);
-    // right-hand M8 x 1.25 with the spindle already turning M3
+    // right-hand M8 x 1.25 with the spindle already turning M3: geared from the set-up
+    // clearance 2 to the depth -12 and back
+    let tap = |pitch, hand, infeed, back, retract_factor| Move::RigidTap {
+        to: [3.0, 4.0, -12.0],
+        pitch,
+        hand,
+        lead_in: 2.0,
+        infeed,
+        back,
+        retract_factor,
+    };
     let m = run(207, &d207(1.25), &ctx).unwrap();
     assert_eq!(
         m,
         vec![
             line(3.0, 4.0, 2.0, Rapid),
-            line(3.0, 4.0, -12.0, PerRev(1.25)),
-            Move::Spindle(SpindleDir::Ccw),
-            line(3.0, 4.0, 2.0, PerRev(1.25)),
-            Move::Spindle(SpindleDir::Cw),
+            tap(1.25, SpindleDir::Cw, 0.0, 0.0, 1.0),
             line(3.0, 4.0, 10.0, Rapid),
         ]
     );
-    // left-hand thread: enter turning M4, reverse to M3 at the bottom
-    let m = run(207, &d207(-1.5), &ctx).unwrap();
+    // left-hand thread: enter turning M4, back to M3 at the clearance; Q403 speeds up the
+    // retraction
+    let m = run(207, &with(&d207(-1.5), 403, 2.0), &ctx).unwrap();
     assert_eq!(
         m,
         vec![
             line(3.0, 4.0, 2.0, Rapid),
             Move::Spindle(SpindleDir::Ccw),
-            line(3.0, 4.0, -12.0, PerRev(1.5)),
+            tap(1.5, SpindleDir::Ccw, 0.0, 0.0, 2.0),
             Move::Spindle(SpindleDir::Cw),
-            line(3.0, 4.0, 2.0, PerRev(1.5)),
             line(3.0, 4.0, 10.0, Rapid),
         ]
     );
@@ -381,30 +388,28 @@ fn tapping_209_chip_breaking_backs_off_or_leaves_the_hole() {
     let ctx = ctx_at([0.0, 0.0, 30.0]);
     let d = with(&with(&with(&d207(1.0), 201, -10.0), 257, 4.0), 256, 0.5);
     let m = run(209, &d, &ctx).unwrap();
-    let f = PerRev(1.0);
-    use SpindleDir::{Ccw, Cw};
     assert_eq!(
         m,
         vec![
             line(0.0, 0.0, 2.0, Rapid),
-            line(0.0, 0.0, -4.0, f),
-            Move::Spindle(Ccw),
-            line(0.0, 0.0, -3.5, f),
-            Move::Spindle(Cw),
-            line(0.0, 0.0, -8.0, f),
-            Move::Spindle(Ccw),
-            line(0.0, 0.0, -7.5, f),
-            Move::Spindle(Cw),
-            line(0.0, 0.0, -10.0, f),
-            Move::Spindle(Ccw),
-            line(0.0, 0.0, 2.0, f),
-            Move::Spindle(Cw),
+            Move::RigidTap {
+                to: [0.0, 0.0, -10.0],
+                pitch: 1.0,
+                hand: SpindleDir::Cw,
+                lead_in: 2.0,
+                infeed: 4.0,
+                back: 0.5,
+                retract_factor: 1.0,
+            },
             line(0.0, 0.0, 10.0, Rapid),
         ]
     );
-    // Q256 = 0: out to the set-up clearance for chip removal, then back in tapping
-    let m = run(209, &with(&d, 256, 0.0), &ctx).unwrap();
-    assert_close(&line_ts(&m), &[2.0, -4.0, 2.0, -8.0, 2.0, -10.0, 2.0, 10.0]);
+    // The strokes from the set-up clearance (2 above the surface): infeeds of 4 from the
+    // surface, backing off 0.5, or with Q256 = 0 out to the clearance for chip removal.
+    let s = crate::cycles::tap_strokes(2.0, 12.0, 4.0, 0.5);
+    assert_close(&s, &[6.0, 5.5, 10.0, 9.5, 12.0, 0.0]);
+    let s = crate::cycles::tap_strokes(2.0, 12.0, 4.0, 0.0);
+    assert_close(&s, &[6.0, 0.0, 10.0, 0.0, 12.0, 0.0]);
     safe_rapids(&m, ctx.pos, 2.0);
 }
 
