@@ -136,6 +136,36 @@ impl Spindle {
     }
 }
 
+impl Spindle {
+    /// A simulated spindle of its own, outside any run (the dashboard keeps one turning
+    /// between runs); `None` when the machine has no spindle or a spindle that is not
+    /// simulated. It has no injected faults: those strike at a run's machine times.
+    pub fn open_simulated(config: &MachineConfig) -> Option<Spindle> {
+        let s = config.spindle.as_ref()?;
+        let SpindleBackendConfig::Sim(sim) = &s.backend else {
+            return None;
+        };
+        Some(Spindle {
+            backend: Box::new(SimSpindle::new(sim_spindle_params(s.max_rpm, sim))),
+            name: "simulated spindle".into(),
+            commanded: 0.0,
+            max_rpm: s.max_rpm,
+            at_speed_timeout: s.at_speed_timeout,
+            last: SpindleFeedback::default(),
+            direction: 0.0,
+            stop_tried: true,
+            unconfirmed: None,
+        })
+    }
+
+    /// One cycle of the spindle alone at time `t` (outside a run, where
+    /// [`MachineIo::cycle`] does it); the feedback is then [`Spindle::feedback`].
+    pub fn cycle(&mut self, t: f64) -> Result<(), BackendError> {
+        self.last = self.backend.cycle(t)?;
+        Ok(())
+    }
+}
+
 impl Drop for Spindle {
     fn drop(&mut self) {
         if !self.stop_tried && self.stop().is_err() {
@@ -553,6 +583,12 @@ impl MachineIo {
             let k = s.axes.iter().position(|&i| i == axis)?;
             s.backend.fault_origin(k)
         })
+    }
+
+    /// Puts `spindle` in place of the machine's spindle and returns the one it had (a
+    /// spindle kept turning from one run to the next changes hands here).
+    pub fn replace_spindle(&mut self, spindle: Option<Spindle>) -> Option<Spindle> {
+        std::mem::replace(&mut self.spindle, spindle)
     }
 
     /// Enables every axis backend.

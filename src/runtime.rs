@@ -26,6 +26,7 @@
 
 mod axis_fault;
 pub(crate) mod command;
+mod display;
 mod error;
 mod events;
 pub mod guard;
@@ -106,6 +107,8 @@ pub struct RunReport {
     /// The test run's planned machine time, s, when the test run ran before the start and
     /// went through the whole program: what progress displays count against.
     pub planned_time: Option<f64>,
+    /// What the touch-probe cycles measured, in the order they ran.
+    pub probe_results: Vec<klar_interp::ProbeResult>,
 }
 
 /// Where an axis stood when a run started: read from its drive when the drive measures its

@@ -7,6 +7,8 @@
 //! Needs `/usr/bin/chromium` and `/usr/bin/chromedriver` (scripts/setup-browser.sh installs
 //! them). Screenshots go to `target/tmp/browser/`.
 
+#[path = "browser/lathe.rs"]
+mod lathe;
 #[path = "browser/manual.rs"]
 mod manual;
 
@@ -287,6 +289,9 @@ async fn dashboard_runs_holds_resumes_overrides_and_shows_a_fault() {
     tokio::time::timeout(Duration::from_secs(240), manual::scenario())
         .await
         .expect("the manual-operation browser test finished in time");
+    tokio::time::timeout(Duration::from_secs(240), lathe::scenario())
+        .await
+        .expect("the lathe, spindle and probing browser test finished in time");
 }
 
 async fn scenario() {

@@ -570,3 +570,40 @@ TCH PROBE 419 DATUM IN ONE AXIS ~
     close("preset Z", xyz[2], ORIGIN[2] + OFF[2], 1e-9);
     close("preset ROT", rot, 0.0, 1e-12);
 }
+
+#[test]
+fn a_probe_cycle_reports_its_results_and_the_preset_it_wrote_as_an_op() {
+    let path = common::program("probing_412.h");
+    let m = machine();
+    let it = m.open_program(&path, m.start_pose()).expect("opens");
+    let results: Vec<klar_interp::ProbeResult> = it
+        .map(|op| op.expect("runs"))
+        .filter_map(|op| match op.kind {
+            klar_interp::OpKind::ProbeResult { result } => Some(result),
+            _ => None,
+        })
+        .collect();
+    assert_eq!(results.len(), 1, "one probing cycle, one result");
+    let r = &results[0];
+    assert_eq!(r.cycle, 412);
+    let c = program_of([-25.0, -10.0]);
+    let q = |n: u32| r.params.iter().find(|p| p.0 == n).map(|p| p.1);
+    close("Q151", q(151).expect("Q151 reported"), c[0], MM);
+    close("Q152", q(152).expect("Q152 reported"), c[1], MM);
+    close("Q153", q(153).expect("Q153 reported"), 24.0, MM);
+    let preset = r.preset.as_ref().expect("the cycle wrote a preset");
+    assert_eq!((preset.row, preset.active), (Some(1), true));
+    let v = |a: klar_interp::AxisLetter| preset.values.iter().find(|p| p.0 == a).map(|p| p.1);
+    close(
+        "preset X",
+        v(klar_interp::AxisLetter::X).expect("X"),
+        ORIGIN[0] + c[0],
+        MM,
+    );
+    close(
+        "preset Z",
+        v(klar_interp::AxisLetter::Z).expect("Z"),
+        ORIGIN[2] + OFF[2],
+        MM,
+    );
+}

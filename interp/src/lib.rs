@@ -31,8 +31,8 @@ pub use interpreter::{
     MAX_SUBPROGRAM_DEPTH, RUN_IDLE_JUMP_LIMIT, check, check_report, syntax_check,
 };
 pub use op::{
-    ApproachShape, AxisLetter, CompSide, CornerRule, Feed, Op, OpKind, Plane, Pose, SourceLoc,
-    SplineAxis,
+    ApproachShape, AxisLetter, CompSide, CornerRule, Feed, Op, OpKind, Plane, Pose, PresetWrite,
+    ProbeResult, SourceLoc, SplineAxis,
 };
 pub use probe::{Probe, ProbeData};
 pub use source::MAX_BLOCK_BYTES;

@@ -372,6 +372,33 @@ pub struct Op {
     pub loc: SourceLoc,
 }
 
+/// The results of one touch-probe cycle (see [`OpKind::ProbeResult`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ProbeResult {
+    /// The cycle number (`TCH PROBE 412` → 412; 0 and 1 for the old format).
+    pub cycle: u32,
+    /// The Q parameters the cycle wrote, in the order written: (number, value).
+    pub params: Vec<(u32, f64)>,
+    /// The preset the cycle wrote, if it wrote one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub preset: Option<PresetWrite>,
+}
+
+/// A preset a touch-probe cycle wrote.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PresetWrite {
+    /// The preset table row written; `None` when the machine has no preset table (the
+    /// active preset then exists only in the run).
+    pub row: Option<i64>,
+    /// True when the row is the active preset, which acts at once.
+    pub active: bool,
+    /// The axis values written (machine coordinates of the new datum), by axis.
+    pub values: Vec<(AxisLetter, f64)>,
+    /// The basic rotation written, degrees, if the cycle writes one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rotation: Option<f64>,
+}
+
 /// The canonical operations.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "op", rename_all = "snake_case")]
@@ -598,6 +625,12 @@ pub enum OpKind {
         strokes: Vec<f64>,
         /// Spindle speed factor of the retracting strokes.
         retract_factor: f64,
+    },
+    /// What a touch-probe cycle measured, once it has: the Q parameters it wrote and the
+    /// preset it wrote, if any. Nothing moves; the run passes it on to displays.
+    ProbeResult {
+        /// The results.
+        result: ProbeResult,
     },
     /// Program stop (M0, STOP) or optional stop (M1): motion halts until resumed.
     Stop {

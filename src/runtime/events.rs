@@ -40,6 +40,11 @@ impl Run<'_, '_> {
                 });
                 Ok(())
             }
+            OpKind::ProbeResult { result } => {
+                // Read by displays; the values are already in the interpreter.
+                self.report.probe_results.push(result.clone());
+                Ok(())
+            }
             _ => {
                 self.log.send(LogRecord::Event { line: op.loc.line });
                 Ok(())

@@ -25,6 +25,8 @@ const APP_JS: &str = include_str!("assets/app.js");
 const STYLE_CSS: &str = include_str!("assets/style.css");
 const VIEW_JS: &str = include_str!("assets/view.js");
 
+mod spindle;
+
 /// Largest program text `POST /api/upload` accepts, bytes.
 pub const MAX_UPLOAD: usize = 1024 * 1024;
 
@@ -64,16 +66,15 @@ impl App {
         let (tx, rx) = std::sync::mpsc::channel();
         let (snapshots, _) = broadcast::channel(256);
         let latest = Arc::new(Mutex::new(idle_snapshot(&options.machine)));
-        let machine = MachineLoop::new(
-            options.machine.clone(),
-            rx,
-            snapshots.clone(),
-            latest.clone(),
-        )
-        .with_operator_stop(stop);
+        let (config, to_pages, slot) = (options.machine.clone(), snapshots.clone(), latest.clone());
+        // Built on its thread: what it holds between runs (a spindle) stays there.
         let thread = std::thread::Builder::new()
             .name("klar-machine".into())
-            .spawn(move || machine.run())?;
+            .spawn(move || {
+                MachineLoop::new(config, rx, to_pages, slot)
+                    .with_operator_stop(stop)
+                    .run();
+            })?;
         let app = App {
             inner: Arc::new(Inner {
                 commands: Mutex::new(tx),
@@ -163,6 +164,7 @@ pub fn router(app: App) -> Router {
             .route("/api/jog", post(jog))
             .route("/api/home", post(home))
             .route("/api/mdi", post(mdi))
+            .route("/api/spindle", post(spindle::spindle))
             .route("/api/upload", post(upload))
             .route("/api/hold", post(|s: State<App>| simple(s, Command::Hold)))
             .route(
@@ -286,6 +288,8 @@ struct MachineInfo {
     lathe: bool,
     /// The tool table: number, name, length, radius (empty without one).
     tools: Vec<ToolRow>,
+    /// The spindle's highest speed, rpm; `None` without a spindle.
+    spindle_max_rpm: Option<f64>,
 }
 
 /// One row of the tool table as the page shows it.
@@ -309,6 +313,7 @@ async fn machine(State(app): State<App>) -> Json<MachineInfo> {
             Err(e) => e,
         },
         lathe: is_lathe(m),
+        spindle_max_rpm: m.spindle.as_ref().map(|s| s.max_rpm),
         tools: match m.tool_table() {
             Ok(Some(t)) => t
                 .iter()

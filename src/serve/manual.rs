@@ -90,6 +90,17 @@ pub enum Refusal {
     /// An MDI request that is not one block.
     #[error("an MDI request is one non-empty line")]
     BadBlock,
+    /// A spindle request on a machine without a spindle.
+    #[error("this machine has no spindle")]
+    NoSpindle,
+    /// A spindle speed outside the machine's spindle range.
+    #[error("the spindle speed must lie above 0 and at most {max} rpm, not {speed}")]
+    SpindleSpeed {
+        /// The speed asked for, rpm.
+        speed: f64,
+        /// The machine's highest spindle speed, rpm.
+        max: f64,
+    },
     /// What the operation needs the machine cannot do from the dashboard.
     #[error("{0}")]
     Unsupported(String),

@@ -5,12 +5,16 @@
 //! A [`Run`] holds parts that must stay on one thread, so it is created and stepped here and
 //! never leaves this thread; the web side only talks to it through channels.
 
-use super::manual::{self, ManualOp, Refusal};
+mod manual_ops;
+mod readings;
+pub mod spindle;
+
+use super::manual::{ManualOp, Refusal};
 use crate::config::{BackendConfig, MachineConfig};
-use crate::machine::MachineIo;
 use crate::runtime::{OperatorStop, Run, RunError, RunOptions, RunStatus, StopLevel};
-use klar_interp::AxisLetter;
+use klar_interp::ProbeResult;
 use serde::Serialize;
+use spindle::{HeldSpindle, SpindleRequest, SpindleStatus};
 use std::path::{Path, PathBuf};
 use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError};
 use std::sync::{Arc, Mutex};
@@ -51,6 +55,8 @@ pub enum Command {
     Start(Option<Reply>),
     /// A manual operation (jog, homing, MDI); refused like [`Command::Start`].
     Manual(ManualOp, Reply),
+    /// The spindle by hand (on, off, speed); refused like [`Command::Start`].
+    Spindle(SpindleRequest, Reply),
     /// Acknowledges the fault or error that ended the last run (refused while running).
     Reset(Reply),
     /// Feed hold: brake along the path and wait.
@@ -123,6 +129,14 @@ pub struct Snapshot {
     pub single_block: bool,
     /// Spindle speed (rpm, signed) when the machine has a spindle.
     pub spindle_rpm: Option<f64>,
+    /// The spindle (commanded direction and speed, measured speed) when the machine has
+    /// one.
+    pub spindle: Option<SpindleStatus>,
+    /// The tool's measured position (X, Y, Z) in the frame of the program's path (see
+    /// [`readings::tool_of`]).
+    pub tool: [f64; 3],
+    /// What the last touch-probe cycle measured, and the preset it wrote.
+    pub probe: Option<ProbeResult>,
     /// The last fault or error message, if the last run ended with one.
     pub message: Option<String>,
     /// The manual operation running or last run (`jog X +2.500`, `MDI L X+10`, …), `None`
@@ -146,6 +160,8 @@ pub struct MachineLoop {
     standing: Vec<f64>,
     /// Axes homed from the dashboard (a simulated axis keeps its reference across runs).
     homed: Vec<bool>,
+    /// The spindle held between runs (turned on by hand, or left turning by an MDI block).
+    held: Option<HeldSpindle>,
     /// Folder for the programs manual operations generate.
     scratch: PathBuf,
     /// The operator's stop from outside (signals): ends a running program and the loop.
@@ -216,6 +232,7 @@ impl MachineLoop {
         Self {
             standing: config.axes.iter().map(|a| a.start).collect(),
             homed: vec![false; config.axes.len()],
+            held: None,
             scratch,
             config,
             commands,
@@ -240,7 +257,17 @@ impl MachineLoop {
         self.publish();
         let mut last_publish = Instant::now();
         while self.stop.level() == StopLevel::None {
-            match self.commands.recv_timeout(IDLE_POLL) {
+            let spinning = self.spindle_tick();
+            if spinning && last_publish.elapsed() >= PUBLISH_PERIOD {
+                self.publish();
+                last_publish = Instant::now();
+            }
+            let poll = if spinning {
+                spindle::SPINDLE_POLL
+            } else {
+                IDLE_POLL
+            };
+            match self.commands.recv_timeout(poll) {
                 Ok(Command::Start(reply)) => self.start_program(reply),
                 Ok(Command::Manual(op, reply)) => self.manual(op, reply),
                 Ok(other) => self.idle_command(other),
@@ -309,134 +336,6 @@ impl MachineLoop {
         }
     }
 
-    /// Carries out a manual operation: refused with the reason, or accepted and run.
-    fn manual(&mut self, op: ManualOp, reply: Reply) {
-        if let Some(r) = self.refusal() {
-            let _ = reply.send(Err(r));
-            return;
-        }
-        let described = describe(&op);
-        let program = match manual::program_for(&op, &self.config, &self.standing) {
-            Ok(p) => p,
-            Err(r) => {
-                let _ = reply.send(Err(r));
-                return;
-            }
-        };
-        let Some((name, text)) = program else {
-            let axis = match &op {
-                ManualOp::Home { axis } => axis.clone(),
-                _ => None,
-            };
-            self.home(axis.as_deref(), reply, described);
-            return;
-        };
-        let path = match manual::write_program(&self.scratch, name, &text) {
-            Ok(p) => p,
-            Err(r) => {
-                let _ = reply.send(Err(r));
-                return;
-            }
-        };
-        // The same test run a program gets, from where the axes stand: refused before
-        // anything moves, with the diagnostics.
-        let checked = crate::testrun::test_run(&path, &self.run_config());
-        if !checked.passed() {
-            let why = checked
-                .errors
-                .iter()
-                // The generated program's line numbers mean nothing to the operator.
-                .map(|d| d.message.clone())
-                .collect::<Vec<_>>()
-                .join("\n");
-            let _ = reply.send(Err(Refusal::Check(why)));
-            return;
-        }
-        let _ = reply.send(Ok(()));
-        tracing::info!(operation = %described, "manual operation");
-        self.snap.manual = Some(described);
-        self.run_program(&path);
-        // A manual move that ended normally leaves the machine idle, ready for the next.
-        if matches!(
-            self.snap.state,
-            MachineState::Finished | MachineState::Stopped
-        ) {
-            self.snap.state = MachineState::Idle;
-            self.publish();
-        }
-    }
-
-    /// Homes one axis or all with the backends' own sequences.
-    fn home(&mut self, axis: Option<&str>, reply: Reply, described: String) {
-        if self.config.needs_wall_clock() {
-            let _ = reply.send(Err(Refusal::Unsupported(
-                "homing drives on a bus or serial line from the dashboard is not supported yet"
-                    .into(),
-            )));
-            return;
-        }
-        let order = match manual::homing_order(&self.config, axis) {
-            Ok(o) => o,
-            Err(r) => {
-                let _ = reply.send(Err(r));
-                return;
-            }
-        };
-        let config = self.run_config();
-        let mut io = match MachineIo::open(&config) {
-            Ok(io) => io,
-            Err(e) => {
-                let _ = reply.send(Err(Refusal::Unsupported(e.to_string())));
-                return;
-            }
-        };
-        let _ = reply.send(Ok(()));
-        self.snap.manual = Some(described);
-        self.snap.state = MachineState::Running;
-        self.publish();
-        let letters = config.letters();
-        let homed = crate::state::home_axes(
-            &mut io,
-            &letters,
-            &order,
-            0.0,
-            config.servo_period,
-            HOMING_TIMEOUT,
-        );
-        let at: Vec<f64> = io.feedback().iter().map(|f| f.position).collect();
-        let referenced: Vec<bool> = io.feedback().iter().map(|f| f.homed).collect();
-        if let Err(e) = io.disable() {
-            tracing::warn!("disabling after homing: {e}");
-        }
-        self.standing.clone_from(&at);
-        self.snap.commanded.clone_from(&at);
-        self.snap.actual = at;
-        for &i in &order {
-            if let (Some(h), Some(&r)) = (self.homed.get_mut(i), referenced.get(i)) {
-                *h = r;
-            }
-        }
-        for (r, (&now, &before)) in self
-            .snap
-            .referenced
-            .iter_mut()
-            .zip(referenced.iter().zip(&self.homed))
-        {
-            *r = now || before || self.config.start_homed;
-        }
-        match homed {
-            Ok(_) => {
-                self.snap.state = MachineState::Idle;
-                self.snap.message = None;
-            }
-            Err(e) => {
-                self.snap.state = MachineState::Fault;
-                self.snap.message = Some(format!("homing: {e}"));
-            }
-        }
-        self.publish();
-    }
-
     fn idle_command(&mut self, command: Command) {
         match command {
             Command::Load { name, path } => {
@@ -456,6 +355,10 @@ impl MachineLoop {
                 self.snap.state = MachineState::Idle;
                 self.snap.message = None;
                 self.snap.line = 0;
+                self.snap.t = 0.0;
+                // After Reset the spindle stands, as after a fault.
+                self.stop_spindle();
+                self.show_held_spindle();
                 let _ = reply.send(Ok(()));
             }
             Command::Override(f) => {
@@ -468,6 +371,7 @@ impl MachineLoop {
             Command::Hold | Command::Resume | Command::Stop => {}
             Command::Start(reply) => self.start_program(reply),
             Command::Manual(op, reply) => self.manual(op, reply),
+            Command::Spindle(request, reply) => self.spindle(request, reply),
         }
         self.publish();
     }
@@ -516,6 +420,8 @@ impl MachineLoop {
                 return;
             }
         };
+        // A spindle turning from before goes on turning under this run's commands.
+        self.spindle_into_run(&mut run);
         run.set_feed_override(self.feed_override);
         run.watch_operator_stop(self.stop.clone());
         // Where the axes stand as their drives report it, before the first cycle.
@@ -547,11 +453,12 @@ impl MachineLoop {
             // Before the first servo cycle there is no measured position yet.
             if status.t > 0.0 && status.t - last_trail_t >= TRAIL_PERIOD {
                 last_trail_t = status.t;
-                self.snap.trail.push(tool_point(&run, &status));
+                self.snap.trail.push(run.tool_position());
             }
             let done = !matches!(stepped, Ok(true));
             if done || last_publish.elapsed() >= PUBLISH_PERIOD {
                 self.fill(&status, &derivatives, MachineState::Running);
+                self.read_run(&mut run, status.spindle_rpm);
                 if self.snap.manual.is_some() {
                     // A manual move has no line in the loaded program.
                     self.snap.line = 0;
@@ -572,6 +479,11 @@ impl MachineLoop {
                 Err(e) => break Some(e),
             }
         };
+        // A manual run that ended normally leaves the spindle as it was (turning on); any
+        // other run's end stops it.
+        let keep =
+            self.snap.manual.is_some() && matches!(outcome, None | Some(RunError::Stopped { .. }));
+        self.spindle_out_of_run(&mut run, keep);
         let (error, stop, spindle_warning) = match run.finish(outcome) {
             Ok(report) => (None, report.stop, report.spindle_warning),
             Err(f) => (Some(f.error), f.report.stop, f.report.spindle_warning),
@@ -612,7 +524,10 @@ impl MachineLoop {
                 self.feed_override = run.set_feed_override(f);
             }
             Command::SingleBlock(on) => self.snap.single_block = on,
-            Command::Start(Some(reply)) | Command::Manual(_, reply) | Command::Reset(reply) => {
+            Command::Start(Some(reply))
+            | Command::Manual(_, reply)
+            | Command::Spindle(_, reply)
+            | Command::Reset(reply) => {
                 let _ = reply.send(Err(Refusal::Busy));
             }
             // Loading while a program runs is refused by the API; a late one is dropped.
@@ -664,27 +579,15 @@ impl MachineLoop {
         }
         self.snap.state = state;
         self.snap.message = message;
-        // At rest: no speed, no spindle (every run stops the spindle at its end).
+        // At rest: no speed, no run time; the spindle stopped by the run's end unless a
+        // manual run handed it back turning.
         self.snap.path_speed = 0.0;
-        self.snap.spindle_rpm = self.config.spindle.as_ref().map(|_| 0.0);
+        self.snap.t = 0.0;
+        self.show_held_spindle();
         self.snap.velocity.iter_mut().for_each(|v| *v = 0.0);
         self.snap.acceleration.iter_mut().for_each(|v| *v = 0.0);
         self.publish();
     }
-}
-
-/// The tool position (X, Y, Z; 0 for an axis the machine lacks) from the measured positions.
-fn tool_point(run: &Run<'_, '_>, status: &RunStatus) -> [f64; 3] {
-    let mut p = [0.0; 3];
-    for (l, &v) in run.letters().iter().zip(&status.actual) {
-        match l {
-            AxisLetter::X => p[0] = v,
-            AxisLetter::Y => p[1] = v,
-            AxisLetter::Z => p[2] = v,
-            _ => {}
-        }
-    }
-    p
 }
 
 /// The snapshot of a machine at rest at its start positions.
@@ -700,7 +603,7 @@ pub fn idle_snapshot(config: &MachineConfig) -> Snapshot {
         blocks: 0,
         letters: config.axes.iter().map(|a| a.letter.to_string()).collect(),
         commanded: start.clone(),
-        actual: start,
+        actual: start.clone(),
         referenced: vec![config.start_homed; n],
         following_error: vec![0.0; n],
         velocity: vec![0.0; n],
@@ -708,23 +611,13 @@ pub fn idle_snapshot(config: &MachineConfig) -> Snapshot {
         path_speed: 0.0,
         feed_override: 1.0,
         single_block: false,
-        spindle_rpm: None,
+        spindle_rpm: config.spindle.as_ref().map(|_| 0.0),
+        spindle: config.spindle.as_ref().map(|_| SpindleStatus::stopped()),
+        tool: readings::tool_of(config, &start),
+        probe: None,
         message: None,
         manual: None,
         trail: Vec::new(),
-    }
-}
-
-/// An operation in words for the page and the log.
-fn describe(op: &ManualOp) -> String {
-    match op {
-        ManualOp::Jog { axis, distance, .. } => format!("jog {axis} {distance:+.3}"),
-        ManualOp::JogContinuous {
-            axis, direction, ..
-        } => format!("jog {axis} {}", if *direction > 0.0 { "+" } else { "-" }),
-        ManualOp::Home { axis: Some(a) } => format!("home {a}"),
-        ManualOp::Home { axis: None } => "home all".into(),
-        ManualOp::Mdi { block } => format!("MDI {}", block.trim()),
     }
 }
 

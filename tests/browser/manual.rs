@@ -54,7 +54,7 @@ const SLOW: &str = "0 BEGIN PGM SLOW MM\n1 BLK FORM 0.1 Z X+0 Y+0 Z-20\n2 BLK FO
 /// A program whose line 3 the test run refuses (an unknown word).
 const FAULTY: &str = "0 BEGIN PGM UP MM\n1 L X+10 R0 F1000\n2 L Y+10 FOO\n3 END PGM UP MM\n";
 
-fn screenshots() -> PathBuf {
+pub(super) fn screenshots() -> PathBuf {
     let target = Path::new(env!("CARGO_TARGET_TMPDIR"))
         .parent()
         .map_or_else(|| PathBuf::from("target"), Path::to_path_buf);
@@ -91,7 +91,7 @@ async fn expect_enabled(c: &Client, state: &str, on: &[&str]) {
     assert_eq!(got, want, "{state}");
 }
 
-async fn wait_state(c: &Client, state: &str) {
+pub(super) async fn wait_state(c: &Client, state: &str) {
     wait_for(&format!("state {state}"), || async {
         (text(c, "state").await == state).then_some(())
     })
@@ -116,7 +116,7 @@ async fn select(c: &Client, id: &str, value: &str) {
 }
 
 /// Controls (buttons, inputs, selects) outside the viewport's width, and where Stop ends.
-async fn outside(c: &Client) -> (Vec<String>, f64, f64) {
+pub(super) async fn outside(c: &Client) -> (Vec<String>, f64, f64) {
     let v = c
         .execute(
             "const w = document.documentElement.clientWidth; const out = []; \
@@ -142,7 +142,7 @@ async fn outside(c: &Client) -> (Vec<String>, f64, f64) {
     )
 }
 
-async fn shot(c: &Client, name: &str) {
+pub(super) async fn shot(c: &Client, name: &str) {
     let png = c.screenshot().await.expect("screenshot");
     assert_eq!(&png[..8], b"\x89PNG\r\n\x1a\n");
     std::fs::write(screenshots().join(name), &png).expect("screenshot saved");
@@ -296,7 +296,7 @@ pub(super) async fn scenario() {
     click(&c, "stop").await;
     wait_state(&c, "stopped").await;
     expect_enabled(&c, "stopped", &["start", "jog-plus", "mdi-run", "load"]).await;
-    assert_eq!(text(&c, "spindle").await, "0 rpm");
+    assert_eq!(text(&c, "spindle").await, "M5 / 0 rpm");
 
     // The server goes away: the page says so and offers nothing.
     drop::<Guard>(server);

@@ -38,7 +38,7 @@ use super::expr::{ParamKind, ParamRef};
 use super::stmt::Parsed;
 use crate::cycles::{ParamKey, ParamSource};
 use crate::diag::ProgramError;
-use crate::op::{AxisLetter, Feed, Op, OpKind, Pose, SourceLoc};
+use crate::op::{AxisLetter, Feed, Op, OpKind, Pose, PresetWrite, ProbeResult, SourceLoc};
 use crate::probe::{Probe, ProbeData, ProbeError};
 
 /// A point in the working plane's axes: first axis, second axis, tool axis (mm).
@@ -56,6 +56,10 @@ pub(crate) struct ProbeState {
     old: Option<OldHead>,
     /// Height of the surface found by the probe-axis touch of a centre cycle (Q381=1).
     pub axis_hit: Option<f64>,
+    /// The Q parameters the cycle under way has written (number, value).
+    written: Vec<(u32, f64)>,
+    /// The preset the cycle under way has written.
+    preset: Option<PresetWrite>,
 }
 
 /// What an old-format head block (`0.0`, `1.0`, `1.1`) said.
@@ -109,12 +113,26 @@ impl Machine {
             point: 1,
             loc,
         };
+        self.probe.written.clear();
+        self.probe.preset = None;
         match sub {
             Some(s) => self.old_probe(number, s, &parsed.cycle.items, run, out)?,
             None => {
                 let def = self.read_q_def(number, parsed)?;
                 self.probe_cycle(&def, run, out)?;
             }
+        }
+        // What the cycle measured, for displays: after its moves, where the results hold.
+        if !self.probe.written.is_empty() || self.probe.preset.is_some() {
+            let result = ProbeResult {
+                cycle: number,
+                params: std::mem::take(&mut self.probe.written),
+                preset: self.probe.preset.take(),
+            };
+            out.push_back(Op {
+                kind: OpKind::ProbeResult { result },
+                loc,
+            });
         }
         Ok(Flow::Continue)
     }
@@ -296,6 +314,7 @@ impl Machine {
 
     /// Sets Q parameter `n`.
     pub(super) fn set_q(&mut self, n: u32, v: f64) {
+        self.probe.written.push((n, v));
         self.params.set(
             ParamRef {
                 kind: ParamKind::Q,
@@ -345,6 +364,15 @@ impl Machine {
             Some(q305 as i64)
         };
         let active = q305 == 0.0 || row == self.cyc.active_preset;
+        self.probe.preset = Some(PresetWrite {
+            row,
+            active,
+            values: AxisLetter::ALL
+                .iter()
+                .filter_map(|&a| Some((a, values.get(a.index()).copied().flatten()?)))
+                .collect(),
+            rotation: rot,
+        });
         match (&mut self.cyc.presets, row) {
             (Some(t), Some(nr)) => t.write(nr, values, rot),
             (None, Some(nr)) => {

@@ -491,6 +491,7 @@ impl Planner {
             // A machine function without stop is an event on the path like coolant; it has
             // no standstill to wait in, so its `wait` is not applied.
             OpKind::Coolant { .. }
+            | OpKind::ProbeResult { .. }
             | OpKind::RadiusComp { .. }
             | OpKind::CornerRule { .. }
             | OpKind::WorkingPlane { .. }

@@ -20,6 +20,8 @@ const state = {
   machineTime: 0,   // the test run's planned machine time of the shown program, s
   online: false,
   toScreen: null,
+  lathe: false,     // a lathe: X shown as a diameter, the view Z across and X up
+  spindleMax: null, // the spindle's highest speed, rpm (null: no spindle)
 };
 
 const $ = (id) => document.getElementById(id);
@@ -173,6 +175,13 @@ function runMdi() {
 }
 $("mdi-run").addEventListener("click", runMdi);
 $("mdi-block").addEventListener("keydown", (e) => { if (e.key === "Enter") runMdi(); });
+function spindle(direction) {
+  showMessage("");
+  api("POST", "/api/spindle", { direction, speed: Number($("spindle-speed").value) });
+}
+$("spindle-cw").addEventListener("click", () => spindle("cw"));
+$("spindle-ccw").addEventListener("click", () => spindle("ccw"));
+$("spindle-stop").addEventListener("click", () => spindle("stop"));
 $("single-block").addEventListener("change", (e) => api("POST", "/api/single_block", { on: e.target.checked }));
 $("override").addEventListener("input", (e) => {
   $("override-value").textContent = e.target.value + " %";
@@ -207,12 +216,54 @@ function buildDro(letters) {
 
 function fmt(v, digits) { return (v >= 0 ? "+" : "") + v.toFixed(digits); }
 
+// One DRO position cell: on a lathe X reads as a diameter (⌀), its radius in small print
+// and in the tooltip; every other axis as it stands.
+function showPosition(cell, letter, v) {
+  if (state.lathe && letter === "X") {
+    cell.innerHTML = "";
+    cell.append("⌀ " + fmt(2 * v, 3));
+    const r = document.createElement("small");
+    r.className = "radius";
+    r.textContent = "r " + fmt(v, 3);
+    cell.appendChild(r);
+    cell.title = "diameter; radius " + fmt(v, 3);
+  } else {
+    cell.textContent = fmt(v, 3);
+  }
+}
+
+// The spindle: commanded direction and speed, measured speed.
+function showSpindle(sp) {
+  if (!sp) { $("spindle").textContent = "—"; return; }
+  const dir = { cw: "M3 ⟳", ccw: "M4 ⟲", stop: "M5" }[sp.direction] || sp.direction;
+  const cmd = sp.direction === "stop" ? dir : `${dir} ${sp.commanded.toFixed(0)}`;
+  $("spindle").textContent = `${cmd} / ${sp.measured.toFixed(0)} rpm`;
+}
+
+// The last touch-probe cycle's results and the preset it wrote.
+function showProbe(p) {
+  const box = $("probe-box");
+  box.hidden = !p;
+  if (!p) return;
+  $("probe-cycle").textContent = "cycle " + p.cycle;
+  $("probe-params").textContent = p.params.map(([q, v]) => `Q${q} = ${fmt(v, 4)}`).join("   ");
+  const pr = p.preset;
+  if (pr) {
+    const where = pr.row === null ? "the active preset (no preset table)" : `preset ${pr.row}${pr.active ? " (active)" : ""}`;
+    const values = pr.values.map(([l, v]) => `${l} ${fmt(v, 4)}`);
+    if (pr.rotation !== undefined && pr.rotation !== null) values.push(`ROT ${fmt(pr.rotation, 4)}°`);
+    $("probe-preset").textContent = `written to ${where}: ${values.join("  ")}`;
+  } else {
+    $("probe-preset").textContent = "no preset written";
+  }
+}
+
 function applySnapshot(s) {
   if (s.letters.join() !== state.letters.join()) buildDro(s.letters);
   if (s.program && s.program !== state.shownProgram) showProgram(s.program);
   s.letters.forEach((l, i) => {
-    $("cmd-" + l).textContent = fmt(s.commanded[i], 3);
-    $("act-" + l).textContent = fmt(s.actual[i], 3);
+    showPosition($("cmd-" + l), l, s.commanded[i]);
+    showPosition($("act-" + l), l, s.actual[i]);
     $("fe-" + l).textContent = fmt(s.following_error[i], 4);
     // An axis whose position is not referenced (not homed, no absolute encoder) is marked.
     const referenced = !s.referenced || s.referenced[i];
@@ -220,11 +271,13 @@ function applySnapshot(s) {
     cell.classList.toggle("unreferenced", !referenced);
     cell.title = referenced ? "referenced" : "not referenced";
   });
-  // Distance to go: from where the axes stand to the end of the executing block's motion.
+  // Distance to go: from the tool to the end of the executing block's motion, both in the
+  // frame of the program's path (on a lathe X as a diameter).
   const end = !s.manual && (s.state === "running" || s.state === "held") ? state.ends[s.line] : null;
-  s.letters.forEach((l, i) => {
+  s.letters.forEach((l) => {
     const k = ["X", "Y", "Z"].indexOf(l);
-    $("togo-" + l).textContent = end && k >= 0 ? fmt(end[k] - s.actual[i], 3) : "";
+    const d = end && k >= 0 ? (end[k] - s.tool[k]) * (state.lathe && l === "X" ? 2 : 1) : null;
+    $("togo-" + l).textContent = d === null ? "" : fmt(d, 3);
   });
   // Progress by machine time against the test run's planned machine time.
   const total = s.manual ? 0 : state.machineTime;
@@ -239,7 +292,8 @@ function applySnapshot(s) {
   $("time").textContent = s.t.toFixed(3);
   $("path-speed").textContent = s.path_speed.toFixed(1);
   $("blocks").textContent = s.blocks;
-  $("spindle").textContent = s.spindle_rpm === null ? "—" : s.spindle_rpm.toFixed(0) + " rpm";
+  showSpindle(s.spindle);
+  showProbe(s.probe);
   $("single-block").checked = s.single_block;
   if (document.activeElement !== $("override")) {
     const pct = Math.round(s.feed_override * 100);
@@ -257,8 +311,11 @@ function applySnapshot(s) {
     }
     state.currentLine = s.line;
   }
-  if (s.t < state.runT) { state.history = []; }
-  state.runT = s.t;
+  // A new run (its machine time starts again): a new motion plot. At the end t is cleared;
+  // the plot of the run just ended stays.
+  const live = s.state === "running" || s.state === "held";
+  if (live && s.t < state.runT) { state.history = []; }
+  state.runT = live ? s.t : 0;
   if (s.state === "running" || s.state === "held") {
     for (const p of s.trail) state.trail.push(p);
     state.history.push({ t: s.t, speed: s.path_speed, acc: s.acceleration.slice() });
@@ -288,6 +345,9 @@ function updateButtons() {
   };
   for (const id of ["jog-minus", "jog-plus", "jog-cont-minus", "jog-cont-plus", "home-axis", "home-all", "mdi-run"]) {
     enable[id] = on && !moving && !fault;
+  }
+  for (const id of ["spindle-cw", "spindle-ccw", "spindle-stop"]) {
+    enable[id] = on && !moving && !fault && state.spindleMax !== null;
   }
   // A continuous jog's own button stays usable while it moves: letting go stops it.
   if (on && st === "running" && s.manual && s.manual.startsWith("jog") && !/\d/.test(s.manual)) {
@@ -363,6 +423,15 @@ function drawSpeedPlot() {
 (async () => {
   const m = await api("GET", "/api/machine");
   $("machine-name").textContent = m.name;
+  state.lathe = !!m.lathe;
+  state.spindleMax = m.spindle_max_rpm === undefined ? null : m.spindle_max_rpm;
+  if (state.spindleMax !== null) $("spindle-speed").max = state.spindleMax;
+  $("spindle-bar").hidden = state.spindleMax === null;
+  // On a lathe the spindle is the main spindle, and the view is the lathe's Z/X.
+  for (const e of document.querySelectorAll(".spindle-name")) e.textContent = state.lathe ? "main spindle" : "spindle";
+  for (const e of document.querySelectorAll(".mill-view")) e.hidden = state.lathe;
+  $("lathe-view").hidden = !state.lathe;
+  if (state.lathe) { state.view = "lathe"; setViewPreset("lathe"); }
   $("machine-preset").textContent = "preset " + m.preset;
   $("preset-line").textContent = "active preset: " + m.preset;
   const tools = $("tools").querySelector("tbody");

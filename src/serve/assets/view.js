@@ -8,6 +8,7 @@ const VIEW_PRESETS = {
   iso: { yaw: Math.PI / 4, pitch: Math.atan(1 / Math.SQRT2) },
   top: { yaw: 0, pitch: Math.PI / 2 },
   front: { yaw: 0, pitch: 0 },
+  lathe: { yaw: 0, pitch: 0 },
 };
 
 const camera = { yaw: VIEW_PRESETS.iso.yaw, pitch: VIEW_PRESETS.iso.pitch, zoom: 1, panX: 0, panY: 0, custom: false };
@@ -21,9 +22,11 @@ function setViewPreset(name) {
   camera.zoom = 1; camera.panX = 0; camera.panY = 0; camera.custom = false;
 }
 
-// Machine X/Y/Z to the view plane: u to the right, v up.
+// Path X/Y/Z to the view plane: u to the right, v up. A lathe's view has Z across and X
+// (a radius) up, as `klar plot` draws it; the panning and zoom act on it as on the others.
 function project(p) {
   const [x, y, z] = p;
+  if (state.lathe) return [z, x];
   const cy = Math.cos(camera.yaw), sy = Math.sin(camera.yaw);
   const cp = Math.cos(camera.pitch), sp = Math.sin(camera.pitch);
   const u = x * cy - y * sy;
@@ -41,12 +44,11 @@ function boxEdges(min, max) {
   return edges;
 }
 
-// The tool tip (X, Y, Z) from the latest snapshot's measured positions.
+// The tool tip (X, Y, Z) from the latest snapshot: its measured position in the frame of
+// the program's path, the frame the path, the trace and the distance to go are drawn in.
 function toolTip() {
   const s = state.lastSnapshot;
-  if (!s) return null;
-  const at = (l) => { const i = s.letters.indexOf(l); return i < 0 ? 0 : s.actual[i]; };
-  return [at("X"), at("Y"), at("Z")];
+  return s && s.tool ? s.tool : null;
 }
 
 function drawToolpath() {
@@ -59,10 +61,18 @@ function drawToolpath() {
   const tip = toolTip();
   let x0 = Infinity, x1 = -Infinity, y0 = Infinity, y1 = -Infinity;
   const grow = ([x, y]) => { x0 = Math.min(x0, x); x1 = Math.max(x1, x); y0 = Math.min(y0, y); y1 = Math.max(y1, y); };
-  strokes.forEach((s) => s.pts.forEach(grow));
-  trail.forEach(grow);
-  stock.forEach((e) => e.forEach(grow));
-  if (tip) grow(project(tip));
+  // A lathe's view frames the cutting moves (when it has any), so a tool change point far
+  // out does not shrink the part into a corner; elsewhere everything drawn is framed.
+  const cutting = strokes.filter((s) => !s.rapid);
+  if (state.lathe && cutting.length) {
+    cutting.forEach((s) => s.pts.forEach(grow));
+    stock.forEach((e) => e.forEach(grow));
+  } else {
+    strokes.forEach((s) => s.pts.forEach(grow));
+    trail.forEach(grow);
+    stock.forEach((e) => e.forEach(grow));
+    if (tip) grow(project(tip));
+  }
   if (!(x0 <= x1)) { x0 = -1; x1 = 1; y0 = -1; y1 = 1; }
   const pad = 30;
   const fit = Math.min((cv.width - 2 * pad) / Math.max(x1 - x0, 1), (cv.height - 2 * pad) / Math.max(y1 - y0, 1));
@@ -72,6 +82,7 @@ function drawToolpath() {
   state.toScreen = px;
 
   drawScale(g, cv, scale);
+  if (state.lathe) drawDiameterRuler(g, cv, scale, (v) => px([0, v])[1]);
   const line = (pts) => {
     g.beginPath();
     pts.forEach((p, i) => { const [a, b] = px(p); if (i) g.lineTo(a, b); else g.moveTo(a, b); });
@@ -95,7 +106,8 @@ function drawToolpath() {
   if (tip) {
     // The tool: its tip as a dot, its shank along +Z.
     const [a, b] = px(project(tip));
-    const up = project([tip[0], tip[1], tip[2] + 1]);
+    // (on a lathe the tool holder stands away from the spindle axis: along +X)
+    const up = project(state.lathe ? [tip[0] + 1, tip[1], tip[2]] : [tip[0], tip[1], tip[2] + 1]);
     const [ua, ub] = px(up);
     const len = Math.hypot(ua - a, ub - b);
     const [dx, dy] = len > 1e-9 ? [(ua - a) / len, (ub - b) / len] : [0, 0];
@@ -117,9 +129,35 @@ function drawScale(g, cv, scale) {
   g.beginPath(); g.moveTo(12, cv.height - 14); g.lineTo(12 + w, cv.height - 14); g.stroke();
   g.fillStyle = "#333"; g.font = "12px sans-serif";
   g.fillText(len + " mm", 16 + w, cv.height - 10);
-  const names = { iso: "isometric", top: "X/Y", front: "X/Z" };
+  const names = { iso: "isometric", top: "X/Y", front: "X/Z", lathe: "Z → / X ⌀ ↑" };
   const zoom = camera.zoom === 1 ? "" : "  zoom " + camera.zoom.toFixed(2) + "×";
   g.fillText((camera.custom ? "orbit" : names[state.view]) + zoom, 12, 16);
+}
+
+/// A lathe's X ruler on the left edge: ticks at round radii, labelled as diameters (X ⌀),
+/// and the spindle axis (X = 0) dash-dotted across. `yOf` maps a radius to the canvas.
+function drawDiameterRuler(g, cv, scale, yOf) {
+  const target = 60 / scale;
+  const pow = Math.pow(10, Math.floor(Math.log10(target)));
+  const step = [1, 2, 5, 10].map((m) => m * pow).find((l) => l >= target) || pow;
+  g.strokeStyle = "#555"; g.fillStyle = "#333"; g.lineWidth = 1; g.font = "11px sans-serif";
+  const x = 44;
+  g.beginPath(); g.moveTo(x, 44); g.lineTo(x, cv.height - 30); g.stroke();
+  const top = Math.ceil(radiusAt(cv.height - 30) / step), bottom = Math.floor(radiusAt(44) / step);
+  function radiusAt(y) { return (yOf(0) - y) / scale; }
+  for (let k = top; k <= bottom; k++) {
+    const y = yOf(k * step);
+    g.beginPath(); g.moveTo(x - 4, y); g.lineTo(x, y); g.stroke();
+    const label = String(+(2 * k * step).toFixed(6));
+    g.fillText(label, x - 6 - g.measureText(label).width, y + 4);
+  }
+  g.fillText("X ⌀ [mm]", x - 30, 36);
+  const y0 = yOf(0);
+  if (y0 > 0 && y0 < cv.height) {
+    g.setLineDash([12, 3, 2, 3]); g.strokeStyle = "#8a96a3";
+    g.beginPath(); g.moveTo(x, y0); g.lineTo(cv.width - 8, y0); g.stroke();
+    g.setLineDash([]);
+  }
 }
 
 // ---- mouse and touch: zoom, pan, orbit ----------------------------------------------------
@@ -144,7 +182,7 @@ function drawScale(g, cv, scale) {
   }, { passive: false });
   let drag = null;
   cv.addEventListener("pointerdown", (e) => {
-    drag = { x: e.clientX, y: e.clientY, orbit: e.shiftKey || e.button === 2 };
+    drag = { x: e.clientX, y: e.clientY, orbit: !state.lathe && (e.shiftKey || e.button === 2) };
     cv.setPointerCapture(e.pointerId);
   });
   cv.addEventListener("pointermove", (e) => {
