@@ -400,6 +400,7 @@ impl DinExec {
             )),
             Some(793) => Some((&["ZS", "ZE", "P", "F"], "G793")),
             Some(33) => Some((&super::thread::G33_WORDS[..], "G33")),
+            Some(31) => Some((&super::thread_cycle::G31_WORDS[..], "G31")),
             Some(71 | 36) => Some((&["Z", "ZS", "ZE", "X", "XS", "XE", "F"], "G71/G36")),
             Some(74) => Some((
                 &["Z", "ZS", "ZE", "X", "XS", "XE", "P", "I", "B", "J", "F"],
@@ -485,6 +486,19 @@ impl DinExec {
             }
             Some(18) => {}
             Some(33) => super::thread::g33(l, &mut self.thread, g, loc, out)?,
+            Some(31) => {
+                let segs = match g.get("NS") {
+                    None => None,
+                    Some(w) => {
+                        let ne = g.get("NE").map(|w| whole(w, "NE")).transpose()?;
+                        let ns = Some(u64::from(whole(w, "NS")?));
+                        // without NE: the element NS alone
+                        let ne = ne.map(u64::from).or(ns);
+                        Some(self.contour.segments(ns, ne).map_err(|e| (gpos, e))?)
+                    }
+                };
+                super::thread_cycle::g31(&mut self.lathe, g, segs, loc, out)?;
+            }
             Some(26) => l.speed_limit = g.value("S")?,
             Some(side @ (40..=42)) => {
                 let side = match side {
@@ -658,7 +672,7 @@ impl DinExec {
                     792 | 794 | 797 | 798 => Some("contour milling cycles other than G793"),
                     830 => Some("contour-parallel roughing G830"),
                     869 => Some("recess turning G869"),
-                    31 | 72 | 73 => Some("threading, boring and tapping cycles"),
+                    72 | 73 => Some("boring and tapping cycles G72/G73"),
                     _ => None,
                 };
                 return Err((

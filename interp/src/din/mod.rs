@@ -24,6 +24,7 @@ pub mod pattern;
 pub(crate) mod roughing;
 pub(crate) mod run;
 pub(crate) mod thread;
+pub(crate) mod thread_cycle;
 pub mod tilt;
 pub mod unknown;
 
