@@ -647,6 +647,16 @@ impl DinExec {
                 let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
                 roughing::rough(l, &segs, self.blank, &p, loc, out).map_err(|e| (gpos, e))?;
             }
+            Some(830) => {
+                Self::check_words(g, &super::parallel::G830_WORDS[..], "G830")?;
+                let ns = g.get("NS").map(|w| whole(w, "NS")).transpose()?;
+                let ne = g.get("NE").map(|w| whole(w, "NE")).transpose()?;
+                let (ns, ne) = (ns.map(u64::from), ne.map(u64::from).or(ns.map(u64::from)));
+                let p = super::parallel::params(l, g)?;
+                let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
+                super::parallel::rough(l, &segs, self.blank, &p, loc, out)
+                    .map_err(|e| (gpos, e))?;
+            }
             Some(code @ (860 | 866 | 870)) => {
                 self.recessing(g, code, loc, out)?;
             }
@@ -670,7 +680,6 @@ impl DinExec {
             Some(other) => {
                 let name = match other {
                     792 | 794 | 797 | 798 => Some("contour milling cycles other than G793"),
-                    830 => Some("contour-parallel roughing G830"),
                     869 => Some("recess turning G869"),
                     72 | 73 => Some("boring and tapping cycles G72/G73"),
                     _ => None,

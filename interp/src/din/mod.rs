@@ -20,6 +20,7 @@ pub mod flow;
 pub(crate) mod grooving;
 pub(crate) mod lateral;
 pub(crate) mod lathe;
+pub(crate) mod parallel;
 pub mod pattern;
 pub(crate) mod roughing;
 pub(crate) mod run;
