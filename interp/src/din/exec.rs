@@ -401,6 +401,7 @@ impl DinExec {
             )),
             Some(793) => Some((&["ZS", "ZE", "P", "F"], "G793")),
             Some(33) => Some((&super::thread::G33_WORDS[..], "G33")),
+            Some(31) => Some((&super::thread_cycle::G31_WORDS[..], "G31")),
             Some(71 | 36) => Some((&["Z", "ZS", "ZE", "X", "XS", "XE", "F"], "G71/G36")),
             Some(74) => Some((
                 &["Z", "ZS", "ZE", "X", "XS", "XE", "P", "I", "B", "J", "F"],
@@ -486,6 +487,19 @@ impl DinExec {
             }
             Some(18) => {}
             Some(33) => super::thread::g33(l, &mut self.thread, g, loc, out)?,
+            Some(31) => {
+                let segs = match g.get("NS") {
+                    None => None,
+                    Some(w) => {
+                        let ne = g.get("NE").map(|w| whole(w, "NE")).transpose()?;
+                        let ns = Some(u64::from(whole(w, "NS")?));
+                        // without NE: the element NS alone
+                        let ne = ne.map(u64::from).or(ns);
+                        Some(self.contour.segments(ns, ne).map_err(|e| (gpos, e))?)
+                    }
+                };
+                super::thread_cycle::g31(&mut self.lathe, g, segs, loc, out)?;
+            }
             Some(26) => {
                 // G26 S: the main spindle's speed limit; under constant surface speed the
                 // spindle follows it from here on.
@@ -657,6 +671,16 @@ impl DinExec {
                 let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
                 roughing::rough(l, &segs, self.blank, &p, loc, out).map_err(|e| (gpos, e))?;
             }
+            Some(830) => {
+                Self::check_words(g, &super::parallel::G830_WORDS[..], "G830")?;
+                let ns = g.get("NS").map(|w| whole(w, "NS")).transpose()?;
+                let ne = g.get("NE").map(|w| whole(w, "NE")).transpose()?;
+                let (ns, ne) = (ns.map(u64::from), ne.map(u64::from).or(ns.map(u64::from)));
+                let p = super::parallel::params(l, g)?;
+                let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
+                super::parallel::rough(l, &segs, self.blank, &p, loc, out)
+                    .map_err(|e| (gpos, e))?;
+            }
             Some(code @ (860 | 866 | 870)) => {
                 self.recessing(g, code, loc, out)?;
             }
@@ -680,9 +704,8 @@ impl DinExec {
             Some(other) => {
                 let name = match other {
                     792 | 794 | 797 | 798 => Some("contour milling cycles other than G793"),
-                    830 => Some("contour-parallel roughing G830"),
                     869 => Some("recess turning G869"),
-                    31 | 72 | 73 => Some("threading, boring and tapping cycles"),
+                    72 | 73 => Some("boring and tapping cycles G72/G73"),
                     _ => None,
                 };
                 return Err((

@@ -20,10 +20,12 @@ pub mod flow;
 pub(crate) mod grooving;
 pub(crate) mod lateral;
 pub(crate) mod lathe;
+pub(crate) mod parallel;
 pub mod pattern;
 pub(crate) mod roughing;
 pub(crate) mod run;
 pub(crate) mod thread;
+pub(crate) mod thread_cycle;
 pub mod tilt;
 pub mod unknown;
 
