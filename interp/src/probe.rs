@@ -50,6 +50,12 @@ pub trait Probe: std::fmt::Debug + Send {
         radius: f64,
         blank: Option<&Blank>,
     ) -> Option<[f64; 3]>;
+
+    /// The rotary table axis C stands at `deg` (machine position, degrees) for the moves that
+    /// follow. A table turning in the primed sense carries the part the other way round (a
+    /// positive angle turns it clockwise seen from +Z). The default ignores it: a probe on a
+    /// machine without a rotary table, or a part that does not sit on one.
+    fn table_at(&mut self, _deg: f64) {}
 }
 
 /// Why a touch-probe cycle stops the program.

@@ -164,6 +164,11 @@ impl Machine {
         self.pos = to;
     }
 
+    /// The machine position of the rotary table axis C, degrees (0 on a machine without one).
+    pub(super) fn table_angle(&self) -> f64 {
+        self.cyc.xf.map_point(&self.pos)[AxisLetter::C]
+    }
+
     /// The feed of positioning moves.
     pub(super) fn positioning(&self) -> Feed {
         self.probe
@@ -207,9 +212,13 @@ impl Machine {
         let end = xyz(&self.cyc.xf.map_point(&self.pose_at(to)));
         let radius = self.probe.data.radius;
         let blank = self.blank;
+        let table = self.table_angle();
         if from != end
             && let Some(p) = self.probe.probe.as_mut()
-            && let Some(hit) = p.touch(from, end, radius, blank.as_ref())
+            && let Some(hit) = {
+                p.table_at(table);
+                p.touch(from, end, radius, blank.as_ref())
+            }
         {
             let short = (0..3)
                 .map(|i| (end[i] - hit[i]).powi(2))
@@ -261,8 +270,12 @@ impl Machine {
         let m_end = self.cyc.xf.map_point(&self.pose_at(end));
         let radius = self.probe.data.radius;
         let blank = self.blank;
+        let table = self.table_angle();
         let hit = match self.probe.probe.as_mut() {
-            Some(p) => p.touch(xyz(&m_start), xyz(&m_end), radius, blank.as_ref()),
+            Some(p) => {
+                p.table_at(table);
+                p.touch(xyz(&m_start), xyz(&m_end), radius, blank.as_ref())
+            }
             None => return Err(perr(ProbeError::NoProbe(run.cycle))),
         };
         let feed = Feed::Rate(self.probe.data.feed / 60.0);
