@@ -11,7 +11,8 @@ use crate::tnc::exec::Blank;
 /// longest probing move and the probing and positioning feeds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ProbeData {
-    /// Radius of the stylus ball, mm.
+    /// Radius of the stylus ball, mm, when the active tool has no radius in the tool table
+    /// (the probe called as a tool with one takes that instead).
     pub radius: f64,
     /// Set-up clearance, mm: the probe starts this far (plus the cycle's Q320 and the ball
     /// radius) before the nominal touch point.

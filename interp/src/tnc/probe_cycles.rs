@@ -205,7 +205,7 @@ impl Machine {
 
     /// The clearance before a touch point: the probe's, the cycle's Q320 and the ball.
     pub(super) fn lead(&self, def: &CycleDef) -> f64 {
-        self.probe.data.set_up + self.opt(def, 320, 0.0) + self.probe.data.radius
+        self.probe.data.set_up + self.opt(def, 320, 0.0) + self.ball()
     }
 
     fn cycle400(
@@ -497,7 +497,7 @@ impl Machine {
             cycle,
             what: "the touch points do not make a circle".into(),
         }))?;
-        let ball = self.probe.data.radius;
+        let ball = self.ball();
         let radius = if inside {
             ball_path + ball
         } else {
