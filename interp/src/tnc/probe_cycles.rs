@@ -36,7 +36,8 @@
 //!   tolerance limits, workpiece status, measuring log and program stop (Q275 …, Q281,
 //!   Q309) are in [`super::probe_measure`] and [`super::probe_report`].
 //! - The cycles 402, 408, 409, 414 … 416, 418 are in [`super::probe_ref`], 425, 426 and 430
-//!   in [`super::probe_measure`], 403 and 405 (turning a rotary table) in [`super::probe_rotary`].
+//!   in [`super::probe_measure`], 403 and 405 (turning a rotary table) in
+//!   [`super::probe_rotary`].
 //! - **417** (preset in the tool axis): the probe stands over Q263/Q264 at the clearance
 //!   above the nominal surface height Q294 and probes downward; the height touched is Q160
 //!   and becomes the tool-axis datum Q333.
