@@ -13,6 +13,10 @@
 //! bores and pockets alone; a lower bound where they meet, which never steps over a surface):
 //! the ball advances by the bound until it closes on the surface, and the crossing is then
 //! bisected to far below a nanometre.
+//!
+//! On a machine with a rotary table C the part sits on the table and turns with it about the
+//! table axis (machine X, Y `table_centre`): the table turns in the primed sense, so at C = c
+//! a machine point `m` lies where `table_centre + Rz(c) · (m − table_centre)` lay at C = 0.
 
 use klar_interp::{Blank, Probe};
 
@@ -73,6 +77,10 @@ pub struct SimWorkpiece {
     pub slots: Vec<Slot>,
     /// Straight ridges standing on the top.
     pub ridges: Vec<Ridge>,
+    /// Machine X, Y of the rotary table axis C the part turns with, mm.
+    pub table_centre: [f64; 2],
+    /// Where the table axis C stands, degrees (0 on a machine without one).
+    pub table_angle: f64,
 }
 
 /// Signed distance from `p` to the box `[lo, hi]` (negative inside).
@@ -103,6 +111,8 @@ const ABOVE: f64 = 1.0e4;
 impl SimWorkpiece {
     /// Part coordinates of machine point `m`.
     pub fn to_part(&self, m: [f64; 3]) -> [f64; 3] {
+        // where the point lay before the table turned
+        let m = self.untable(m, self.table_angle);
         let d = [
             m[0] - self.origin[0] - self.offset[0],
             m[1] - self.origin[1] - self.offset[1],
@@ -115,10 +125,25 @@ impl SimWorkpiece {
     /// Machine coordinates of part point `q`.
     pub fn to_machine(&self, q: [f64; 3]) -> [f64; 3] {
         let (s, c) = self.rotation.to_radians().sin_cos();
-        [
+        let m = [
             self.origin[0] + self.offset[0] + q[0] * c - q[1] * s,
             self.origin[1] + self.offset[1] + q[0] * s + q[1] * c,
             self.origin[2] + self.offset[2] + q[2],
+        ];
+        self.untable(m, -self.table_angle)
+    }
+
+    /// `m` turned about the table axis by `deg`.
+    fn untable(&self, m: [f64; 3], deg: f64) -> [f64; 3] {
+        if deg == 0.0 {
+            return m;
+        }
+        let (s, c) = deg.to_radians().sin_cos();
+        let d = [m[0] - self.table_centre[0], m[1] - self.table_centre[1]];
+        [
+            self.table_centre[0] + d[0] * c - d[1] * s,
+            self.table_centre[1] + d[0] * s + d[1] * c,
+            m[2],
         ]
     }
 
@@ -190,6 +215,10 @@ impl SimWorkpiece {
 const MIN_STEP: f64 = 1e-4;
 
 impl Probe for SimWorkpiece {
+    fn table_at(&mut self, deg: f64) {
+        self.table_angle = deg;
+    }
+
     fn touch(
         &mut self,
         from: [f64; 3],
@@ -259,7 +288,28 @@ mod tests {
             bosses: Vec::new(),
             slots: Vec::new(),
             ridges: Vec::new(),
+            table_centre: [0.0, 0.0],
+            table_angle: 0.0,
         }
+    }
+
+    #[test]
+    fn a_turned_table_carries_the_part_the_other_way_round() {
+        let mut p = part();
+        p.table_centre = [10.0, 20.0];
+        let before = p.to_machine([30.0, 0.0, -10.0]);
+        p.table_at(90.0);
+        let after = p.to_machine([30.0, 0.0, -10.0]);
+        // C+90 turns the part by −90° about (10, 20): (dx, dy) → (dy, −dx)
+        let d = [before[0] - 10.0, before[1] - 20.0];
+        assert!((after[0] - (10.0 + d[1])).abs() < 1e-12, "{after:?}");
+        assert!((after[1] - (20.0 - d[0])).abs() < 1e-12, "{after:?}");
+        assert_eq!(after[2], before[2]);
+        let back = p.to_part(after);
+        assert!(
+            (back[0] - 30.0).abs() < 1e-12 && back[1].abs() < 1e-12,
+            "{back:?}"
+        );
     }
 
     #[test]

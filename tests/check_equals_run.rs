@@ -61,13 +61,21 @@ fn program_files(dir: &Path, depth: u32, out: &mut Vec<PathBuf>) {
 
 /// The machine an example program's own tests run it on: the auxiliary axes on the Modbus
 /// machine, programs moving rotary axes (or tilting, or under TCPM) on mill5, probing
-/// programs on the probing mill (those in programs/probing/ on its feature part), lathe programs on the lathe, everything else on the built-in
+/// programs on the probing machine they name (else the probing mill, or its feature part for
+/// those in programs/probing/), lathe programs on the lathe, everything else on the built-in
 /// mill.
 fn machine_for(path: &Path) -> MachineConfig {
     if path.file_name().is_some_and(|n| n == "aux_axes.h") {
         return machine_file("modbus-sim.toml");
     }
     let text = std::fs::read_to_string(path).unwrap_or_default();
+    // a probing program that names its machine in its comments runs there
+    if let Some(i) = text.find("machines/probing") {
+        let rest = &text[i + "machines/".len()..];
+        if let Some(j) = rest.find(".toml") {
+            return machine_file(&rest[..j + 5]);
+        }
+    }
     if text.contains("TCH PROBE") {
         let features = path
             .parent()

@@ -64,20 +64,17 @@ fn every_program_plots_to_png_and_svg() {
     for p in progs {
         let stem = p.file_name().unwrap().to_string_lossy().replace('.', "_");
         let png = dir.join(format!("{stem}.png"));
-        // probing programs need the machine with the simulated probe and part (those in
-        // programs/probing/ the feature part)
+        // probing programs need a machine with the simulated probe and part: the one they
+        // name in their comments (`machines/probing….toml`), else the probing mill
         let text = std::fs::read_to_string(&p).unwrap_or_default();
-        let features = p
-            .parent()
-            .and_then(Path::file_name)
-            .is_some_and(|d| d == "probing");
-        let file = if features {
-            "machines/probing-features.toml"
-        } else {
-            "machines/probing-mill.toml"
-        };
-        let machine = text.contains("TCH PROBE").then(|| {
-            klar::config::MachineConfig::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(file))
+        let named = text.find("machines/probing").and_then(|i| {
+            let rest = &text[i..];
+            rest.find(".toml").map(|j| rest[..j + 5].to_string())
+        });
+        let probes = text.contains("TCH PROBE") || named.is_some();
+        let file = named.unwrap_or_else(|| "machines/probing-mill.toml".to_string());
+        let machine = probes.then(|| {
+            klar::config::MachineConfig::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(&file))
                 .expect("probing machine")
         });
         plot_program_with(&p, machine.as_ref(), start(), &png, None)

@@ -11,7 +11,8 @@ use crate::tnc::exec::Blank;
 /// longest probing move and the probing and positioning feeds.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ProbeData {
-    /// Radius of the stylus ball, mm.
+    /// Radius of the stylus ball, mm, when the active tool has no radius in the tool table
+    /// (the probe called as a tool with one takes that instead).
     pub radius: f64,
     /// Set-up clearance, mm: the probe starts this far (plus the cycle's Q320 and the ball
     /// radius) before the nominal touch point.
@@ -50,6 +51,12 @@ pub trait Probe: std::fmt::Debug + Send {
         radius: f64,
         blank: Option<&Blank>,
     ) -> Option<[f64; 3]>;
+
+    /// The rotary table axis C stands at `deg` (machine position, degrees) for the moves that
+    /// follow. A table turning in the primed sense carries the part the other way round (a
+    /// positive angle turns it clockwise seen from +Z). The default ignores it: a probe on a
+    /// machine without a rotary table, or a part that does not sit on one.
+    fn table_at(&mut self, _deg: f64) {}
 }
 
 /// Why a touch-probe cycle stops the program.

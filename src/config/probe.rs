@@ -112,6 +112,10 @@ pub struct WorkpieceConfig {
     /// Bolt-hole circles (bores) cut from the top.
     #[serde(default, rename = "hole_circle")]
     pub hole_circles: Vec<HoleCircleConfig>,
+    /// Machine X, Y of the rotary table axis C the part turns with (a machine with a C axis;
+    /// default the machine origin), mm.
+    #[serde(default)]
+    pub table_centre: [f64; 2],
 }
 
 impl MachineConfig {
@@ -180,6 +184,8 @@ impl MachineConfig {
                 .collect(),
             slots: w.slots.iter().map(SlotConfig::feature).collect(),
             ridges: w.ridges.iter().map(RidgeConfig::feature).collect(),
+            table_centre: w.table_centre,
+            table_angle: 0.0,
         })
     }
 
@@ -221,6 +227,7 @@ impl MachineConfig {
                 .offset
                 .iter()
                 .chain(&[w.rotation])
+                .chain(&w.table_centre)
                 .all(|v| v.is_finite() && v.abs() <= 1e6);
             if !finite {
                 return Err("workpiece offset and rotation must be finite numbers".into());

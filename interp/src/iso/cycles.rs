@@ -19,6 +19,9 @@
 //!   assignments that follow, either joined with `~` or on lines of their own (without a
 //!   block number); the definition is complete at the first line carrying the block end
 //!   `*`, or when a numbered block or a line that is not a `Q…=` assignment follows.
+//! - `G4nn NAME` with the same `Q…=` lines is touch-probe cycle 4nn (`TCH PROBE 4nn`),
+//!   acting where it is defined like its Klartext twin: the same probing moves, results and
+//!   presets (the cycles and their rules are in `crate::tnc::probe_cycles`).
 //! - The old HEIDENHAIN cycles G83 (pecking, cycle 1) and G84 (tapping with a floating tap
 //!   holder, cycle 2) take their values as operands `P01 … P05`, in the order of the
 //!   sub-blocks of the Klartext cycle: G83 P01 set-up clearance, P02 total hole depth,
@@ -316,16 +319,24 @@ impl IsoState {
             return Ok(());
         };
         self.parser.cycle.q = open.q;
-        self.exec(
-            &Stmt::CycleDef {
+        // G400 … G499 are the touch-probe cycles, `TCH PROBE 4nn` in Klartext
+        let stmt = if (400..500).contains(&open.number) {
+            Stmt::TouchProbe {
                 number: open.number,
                 sub: None,
-            },
-            text,
-            open.loc,
-            out,
-        )
-        .map(|_| ())
-        .map_err(|(_, e)| (None, e))
+            }
+        } else {
+            Stmt::CycleDef {
+                number: open.number,
+                sub: None,
+            }
+        };
+        let loc = open.loc;
+        self.exec(&stmt, text, loc, out)
+            .map(|_| ())
+            .map_err(|(_, e)| {
+                self.failed_head = Some(loc);
+                (None, e)
+            })
     }
 }

@@ -94,6 +94,9 @@ pub(crate) struct IsoState {
     pub(super) axis: AxisLetter,
     /// A cycle definition whose `Q…=` lines are still being read.
     pub(super) open_cycle: Option<super::cycles::OpenCycle>,
+    /// Where the head block of a cycle definition that failed stands: its error is reported
+    /// there, not at the line that completed the definition.
+    pub(super) failed_head: Option<SourceLoc>,
 }
 
 pub(super) fn err(pos: u32, e: ProgramError) -> ExecError {
@@ -187,6 +190,7 @@ impl IsoState {
             last_ccw: None,
             axis: AxisLetter::Z,
             open_cycle: None,
+            failed_head: None,
         }
     }
 

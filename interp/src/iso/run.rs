@@ -108,6 +108,15 @@ impl IsoProgram {
         Diagnostic::new(self.file.clone(), line, col, self.block.number, error)
     }
 
+    /// The diagnostic of an error raised by a block starting at `start`: at the head block of
+    /// a cycle definition when that definition failed, else at `pos` (or `start`).
+    fn block_diag(&mut self, pos: Option<u32>, start: usize, error: &ProgramError) -> Diagnostic {
+        match self.state.failed_head.take() {
+            Some(at) => Diagnostic::new(self.file.clone(), at.line, at.col, at.block, error),
+            None => self.diag(pos.map_or(start, |p| p as usize), error),
+        }
+    }
+
     fn end_diag(&self, error: &ProgramError) -> Diagnostic {
         let (line, col) = self.reader.end_position();
         Diagnostic::new(self.file.clone(), line, col, None, error)
@@ -195,9 +204,9 @@ impl IsoProgram {
         if numbered || !matches!(self.block.kind, IsoKind::Formula) {
             // a numbered block or one that is no `Q…=` line completes a cycle definition
             // written over several lines
-            self.state
-                .close_cycle(text, &mut self.queue)
-                .map_err(|(p, e)| self.diag(p.map_or(start, |p| p as usize), &e))?;
+            if let Err((p, e)) = self.state.close_cycle(text, &mut self.queue) {
+                return Err(self.block_diag(p, start, &e));
+            }
         }
         let flow = match self.block.kind {
             IsoKind::Header { .. } => {
@@ -232,7 +241,10 @@ impl IsoProgram {
             IsoKind::Words => self.state.words(&self.block, text, loc, &mut self.queue),
             IsoKind::Empty => Ok(IsoFlow::Continue),
         };
-        let flow = flow.map_err(|(p, e)| self.diag(p.map_or(start, |p| p as usize), &e))?;
+        let flow = match flow {
+            Ok(f) => f,
+            Err((p, e)) => return Err(self.block_diag(p, start, &e)),
+        };
         if !self.queue.is_empty() {
             self.jumps = 0;
         }

@@ -36,7 +36,8 @@
 //!   tolerance limits, workpiece status, measuring log and program stop (Q275 …, Q281,
 //!   Q309) are in [`super::probe_measure`] and [`super::probe_report`].
 //! - The cycles 402, 408, 409, 414 … 416, 418 are in [`super::probe_ref`], 425, 426 and 430
-//!   in [`super::probe_measure`].
+//!   in [`super::probe_measure`], 403 and 405 (turning a rotary table) in
+//!   [`super::probe_rotary`].
 //! - **417** (preset in the tool axis): the probe stands over Q263/Q264 at the clearance
 //!   above the nominal surface height Q294 and probes downward; the height touched is Q160
 //!   and becomes the tool-axis datum Q333.
@@ -195,6 +196,8 @@ impl Machine {
             416 | 430 => self.cycle416_430(def, def.number == 416, run, out),
             418 => self.cycle418(def, run, out),
             402 => self.cycle402(def, run, out),
+            403 => self.cycle403(def, run, out),
+            405 => self.cycle405(def, run, out),
             425 => self.cycle425(def, run, out),
             426 => self.cycle426(def, run, out),
             n => Err(perr(ProbeError::Unknown(n))),
@@ -203,16 +206,37 @@ impl Machine {
 
     /// The clearance before a touch point: the probe's, the cycle's Q320 and the ball.
     pub(super) fn lead(&self, def: &CycleDef) -> f64 {
-        self.probe.data.set_up + self.opt(def, 320, 0.0) + self.probe.data.radius
+        self.probe.data.set_up + self.opt(def, 320, 0.0) + self.ball()
     }
 
     fn cycle400(
         &mut self,
         def: &CycleDef,
         datum: bool,
-        mut run: Run,
+        run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<(), ExecError> {
+        let cycle = def.number;
+        let measured = self.edge_angle(def, run, out)?;
+        self.set_q(150, measured);
+        if !datum {
+            return Ok(());
+        }
+        let nominal = self.opt(def, 307, 0.0);
+        let mut xf = self.cyc.xf;
+        xf.basic_rot += measured - nominal;
+        let rot = xf.basic_rot;
+        self.write_preset(cycle, def, xf, &[None; 9], Some(rot), out, run.loc)
+    }
+
+    /// Probes the two points of an edge as 400 does (Q263 … Q267, Q272, Q261, Q260, Q301)
+    /// and returns the edge's angle against its axis, degrees in (−90°, 90°].
+    pub(super) fn edge_angle(
+        &mut self,
+        def: &CycleDef,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<f64, ExecError> {
         let cycle = def.number;
         let p1 = [self.need(def, 263)?, self.need(def, 264)?];
         let p2 = [self.need(def, 265)?, self.need(def, 266)?];
@@ -243,16 +267,7 @@ impl Machine {
         }
         self.up_to(clear, run, out)?;
         let raw = (s[1][1] - s[0][1]).atan2(s[1][0] - s[0][0]).to_degrees();
-        let measured = line_angle(if axis == 1.0 { raw } else { raw - 90.0 });
-        self.set_q(150, measured);
-        if !datum {
-            return Ok(());
-        }
-        let nominal = self.opt(def, 307, 0.0);
-        let mut xf = self.cyc.xf;
-        xf.basic_rot += measured - nominal;
-        let rot = xf.basic_rot;
-        self.write_preset(cycle, def, xf, &[None; 9], Some(rot), out, run.loc)
+        Ok(line_angle(if axis == 1.0 { raw } else { raw - 90.0 }))
     }
 
     /// The centre of a bore probed from `c` outward at four points (0°, 90°, 180°, 270°).
@@ -384,9 +399,35 @@ impl Machine {
         def: &CycleDef,
         inside: bool,
         datum: bool,
-        mut run: Run,
+        run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<(), ExecError> {
+        let c = [self.need(def, 321)?, self.need(def, 322)?];
+        let r = self.need(def, 262)? / 2.0;
+        let (centre, radius) = self.probe_circle(def, inside, datum, run, out)?;
+        self.set_q(151, centre[0] / self.unit);
+        self.set_q(152, centre[1] / self.unit);
+        self.set_q(153, 2.0 * radius / self.unit);
+        if !datum {
+            self.set_q(161, (centre[0] - c[0]) / self.unit);
+            self.set_q(162, (centre[1] - c[1]) / self.unit);
+            self.set_q(163, 2.0 * (radius - r) / self.unit);
+            return Ok(());
+        }
+        self.centre_datum(def, centre, run, out)
+    }
+
+    /// Probes a bore (`inside`) or boss as 412/413 do (Q321, Q322, Q262, Q325, Q247, Q423,
+    /// Q261, Q260, Q301, Q365; with `axis` also the tool axis of Q381) and returns its centre
+    /// and radius.
+    pub(super) fn probe_circle(
+        &mut self,
+        def: &CycleDef,
+        inside: bool,
+        axis: bool,
+        mut run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<([f64; 2], f64), ExecError> {
         let cycle = def.number;
         let c = [self.need(def, 321)?, self.need(def, 322)?];
         let r = self.need(def, 262)? / 2.0;
@@ -449,7 +490,7 @@ impl Machine {
             let t = self.probe_from_here(dir, run, out)?;
             pts.push([t[0], t[1]]);
         }
-        if datum {
+        if axis {
             self.tool_axis_datum(def, run, out)?;
         }
         self.up_to(clear, run, out)?;
@@ -457,22 +498,13 @@ impl Machine {
             cycle,
             what: "the touch points do not make a circle".into(),
         }))?;
-        let ball = self.probe.data.radius;
+        let ball = self.ball();
         let radius = if inside {
             ball_path + ball
         } else {
             ball_path - ball
         };
-        self.set_q(151, centre[0] / self.unit);
-        self.set_q(152, centre[1] / self.unit);
-        self.set_q(153, 2.0 * radius / self.unit);
-        if !datum {
-            self.set_q(161, (centre[0] - c[0]) / self.unit);
-            self.set_q(162, (centre[1] - c[1]) / self.unit);
-            self.set_q(163, 2.0 * (radius - r) / self.unit);
-            return Ok(());
-        }
-        self.centre_datum(def, centre, run, out)
+        Ok((centre, radius))
     }
 
     /// Q381=1: probes the tool axis at Q382/Q383 downward from above Q384 and keeps the

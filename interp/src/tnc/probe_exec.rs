@@ -15,6 +15,10 @@
 //!   points it travels at the measuring height, or at the clearance height Q260 when Q301=1;
 //!   the first touch point is always reached over the clearance height, and at the end the
 //!   probe returns to the clearance height;
+//! - the stylus ball's radius is the radius of the probe's row in the tool table when the
+//!   probe is the active tool and has one there (the TNC keeps R and L of the probe in the
+//!   tool table and feeds, overtravel and set-up clearance in the touch-probe table);
+//!   klar's `[probe]` data give the rest, and the radius when the tool has none;
 //! - cycles 0 and 1 also leave the trigger position (ball centre, program coordinates) in
 //!   Q115 … Q117;
 //! - a preset found by a cycle goes to row Q305 of the preset table when Q303=1 (Q305=0: the
@@ -164,6 +168,23 @@ impl Machine {
         self.pos = to;
     }
 
+    /// The radius of the stylus ball: the radius of the active tool's row in the tool table
+    /// (R plus the table's DR; TOOL CALL's DR is a machining allowance and does not count)
+    /// when the probe is called as a tool with a radius, else the probe's own (`[probe]`).
+    pub(super) fn ball(&self) -> f64 {
+        let table = self.tool_base.1;
+        if self.tool_unknown.is_none() && table > 0.0 {
+            table
+        } else {
+            self.probe.data.radius
+        }
+    }
+
+    /// The machine position of the rotary table axis C, degrees (0 on a machine without one).
+    pub(super) fn table_angle(&self) -> f64 {
+        self.cyc.xf.map_point(&self.pos)[AxisLetter::C]
+    }
+
     /// The feed of positioning moves.
     pub(super) fn positioning(&self) -> Feed {
         self.probe
@@ -205,11 +226,15 @@ impl Machine {
         let xyz = |p: &Pose| [p[AxisLetter::X], p[AxisLetter::Y], p[AxisLetter::Z]];
         let from = xyz(&self.cyc.xf.map_point(&self.pos));
         let end = xyz(&self.cyc.xf.map_point(&self.pose_at(to)));
-        let radius = self.probe.data.radius;
+        let radius = self.ball();
         let blank = self.blank;
+        let table = self.table_angle();
         if from != end
             && let Some(p) = self.probe.probe.as_mut()
-            && let Some(hit) = p.touch(from, end, radius, blank.as_ref())
+            && let Some(hit) = {
+                p.table_at(table);
+                p.touch(from, end, radius, blank.as_ref())
+            }
         {
             let short = (0..3)
                 .map(|i| (end[i] - hit[i]).powi(2))
@@ -259,10 +284,14 @@ impl Machine {
         let xyz = |p: &Pose| [p[AxisLetter::X], p[AxisLetter::Y], p[AxisLetter::Z]];
         let m_start = self.cyc.xf.map_point(&self.pose_at(start));
         let m_end = self.cyc.xf.map_point(&self.pose_at(end));
-        let radius = self.probe.data.radius;
+        let radius = self.ball();
         let blank = self.blank;
+        let table = self.table_angle();
         let hit = match self.probe.probe.as_mut() {
-            Some(p) => p.touch(xyz(&m_start), xyz(&m_end), radius, blank.as_ref()),
+            Some(p) => {
+                p.table_at(table);
+                p.touch(xyz(&m_start), xyz(&m_end), radius, blank.as_ref())
+            }
             None => return Err(perr(ProbeError::NoProbe(run.cycle))),
         };
         let feed = Feed::Rate(self.probe.data.feed / 60.0);
@@ -308,7 +337,7 @@ impl Machine {
         out: &mut VecDeque<Op>,
     ) -> Result<P3, ExecError> {
         let t = self.probe_from_here(dir, run, out)?;
-        let r = self.probe.data.radius;
+        let r = self.ball();
         Ok([t[0] + dir[0] * r, t[1] + dir[1] * r, t[2] + dir[2] * r])
     }
 
@@ -512,7 +541,7 @@ impl Machine {
                 if let Some(res) = head.result {
                     let k = dir_xyz.iter().position(|v| v.abs() == 1.0).unwrap_or(2);
                     let ax = AxisLetter::ALL.get(k).copied().unwrap_or(AxisLetter::Z);
-                    let surface = tp[ax] + dir_xyz[k] * self.probe.data.radius;
+                    let surface = tp[ax] + dir_xyz[k] * self.ball();
                     self.params.set(res, surface / self.unit);
                 }
                 Ok(())

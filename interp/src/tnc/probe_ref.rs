@@ -267,7 +267,7 @@ impl Machine {
             let t = self.probe_from_here([d[0], d[1], 0.0], run, out)?;
             ball[k] = [t[0], t[1]];
         }
-        let r = self.probe.data.radius;
+        let r = self.ball();
         let flat = || bad(def.number, "the touch points of an edge coincide");
         let (n1, e1) = edge(ball[0], ball[1], dirs[0], r).ok_or_else(flat)?;
         let (n2, e2) = edge(ball[2], ball[3], dirs[2], r).ok_or_else(flat)?;

@@ -1,0 +1,66 @@
+%PROBING_412 G71 *
+; Touch-probe cycles in TNC ISO on machines/probing-mill.toml: G400 squares the part with a
+; basic rotation from its front edge, G412 puts the preset into the centre of the large bore
+; and the top of the part (probed beside the bore) to Z0, G421 then measures that bore
+; against the new preset. The parameters stand on lines of their own; the last one carries
+; the block end.
+N10 G30 G17 X-50 Y-40 Z-30 *
+N20 G31 G90 X+50 Y+40 Z+0 *
+N30 T1 G17 S0 *
+N40 G00 G40 G90 Z+40 M05 *
+N50 G400 BASIC ROTATION
+    Q263=-20   ;1ST POINT 1ST AXIS
+    Q264=-40   ;1ST POINT 2ND AXIS
+    Q265=+25   ;2ND POINT 1ST AXIS
+    Q266=-40   ;2ND POINT 2ND AXIS
+    Q272=+1    ;MEASURING AXIS
+    Q267=+1    ;TRAVERSE DIRECTION
+    Q261=-12   ;MEASURING HEIGHT
+    Q320=+4    ;SET-UP CLEARANCE
+    Q260=+25   ;CLEARANCE HEIGHT
+    Q301=+1    ;MOVE TO CLEARANCE
+    Q307=+0    ;PRESET ROTATION ANG.
+    Q305=+0    ;NUMBER IN TABLE *
+N60 G412 PRESET INSIDE CIRCLE
+    Q321=-25   ;CENTER IN 1ST AXIS
+    Q322=-10   ;CENTER IN 2ND AXIS
+    Q262=+22   ;NOMINAL DIAMETER
+    Q325=+30   ;STARTING ANGLE
+    Q247=+120  ;STEPPING ANGLE
+    Q261=-8    ;MEASURING HEIGHT
+    Q320=+3    ;SET-UP CLEARANCE
+    Q260=+25   ;CLEARANCE HEIGHT
+    Q301=+0    ;MOVE TO CLEARANCE
+    Q305=+0    ;NUMBER IN TABLE
+    Q331=+0    ;DATUM
+    Q332=+0    ;DATUM
+    Q303=+1    ;MEAS. VALUE TRANSFER
+    Q381=+1    ;PROBE IN TS AXIS
+    Q382=-5    ;1ST CO. FOR TS AXIS
+    Q383=+0    ;2ND CO. FOR TS AXIS
+    Q384=+0    ;3RD CO. FOR TS AXIS
+    Q333=+0    ;DATUM
+    Q423=+3    ;NO. OF PROBE POINTS
+    Q365=+1    ;TYPE OF TRAVERSE *
+N70 G421 MEASURE HOLE ~
+    Q273=+0    ;CENTER IN 1ST AXIS ~
+    Q274=+0    ;CENTER IN 2ND AXIS ~
+    Q262=+22   ;NOMINAL DIAMETER ~
+    Q325=+0    ;STARTING ANGLE ~
+    Q247=+90   ;STEPPING ANGLE ~
+    Q261=-8    ;MEASURING HEIGHT ~
+    Q320=+3    ;SET-UP CLEARANCE ~
+    Q260=+25   ;CLEARANCE HEIGHT ~
+    Q301=+1    ;MOVE TO CLEARANCE ~
+    Q275=+24.01 ;MAXIMUM LIMIT ~
+    Q276=+23.99 ;MINIMUM LIMIT ~
+    Q279=+0.01 ;TOLERANCE 1ST CENTER ~
+    Q280=+0.01 ;TOLERANCE 2ND CENTER ~
+    Q281=+0    ;MEASURING LOG ~
+    Q309=+1    ;PGM STOP TOLERANCE ~
+    Q330=+0    ;TOOL ~
+    Q423=+4    ;NO. OF PROBE POINTS ~
+    Q365=+1    ;TYPE OF TRAVERSE *
+N80 G00 G40 X+0 Y+0 Z+40 *
+N90 M30 *
+N99999999 %PROBING_412 G71 *
