@@ -523,12 +523,7 @@ impl SimCia402Drive {
             self.offset,
             self.counts_per_unit(),
         );
-        self.od
-            .set(TOUCH_PROBE_STATUS, 0, u32::from(self.touch.status));
-        self.od
-            .set(TOUCH_PROBE_1_POSITIVE, 0, self.touch.latched.0 as u32);
-        self.od
-            .set(TOUCH_PROBE_1_NEGATIVE, 0, self.touch.latched.1 as u32);
+        self.touch.publish(&mut self.od);
         self.publish(mode, target_units);
         let mut shared = self.control.lock();
         shared.position = self.plant.actual_position();
@@ -780,8 +775,7 @@ impl BusDevice for SimCia402Drive {
                 // The touch-probe function acts at once as well.
                 self.touch
                     .apply(self.od.u32(TOUCH_PROBE_FUNCTION, 0) as u16);
-                self.od
-                    .set(TOUCH_PROBE_STATUS, 0, u32::from(self.touch.status));
+                self.touch.publish(&mut self.od);
                 // The drive takes a new mode of operation at once.
                 let mode = self.od.u32(MODES_OF_OPERATION, 0);
                 self.od.set(MODES_DISPLAY, 0, mode);

@@ -12,6 +12,8 @@
 
 use klar_drivers::cia402::objects::*;
 
+use super::od::ObjectDictionary;
+
 /// Where the simulated probe input switches: it is high while the true position is at or
 /// past `at` (above it when `above`, below it otherwise), in the plant's units.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -47,6 +49,13 @@ pub(crate) struct TouchProbe {
 }
 
 impl TouchProbe {
+    /// Writes 0x60B9 … 0x60BB into the drive's dictionary.
+    pub(crate) fn publish(&self, od: &mut ObjectDictionary) {
+        od.set(TOUCH_PROBE_STATUS, 0, u32::from(self.status));
+        od.set(TOUCH_PROBE_1_POSITIVE, 0, self.latched.0 as u32);
+        od.set(TOUCH_PROBE_1_NEGATIVE, 0, self.latched.1 as u32);
+    }
+
     /// Takes 0x60B8 `function` (after an SDO write and at every SYNC, for a mapped one):
     /// the enable and edge bits that rose arm their latch and clear what it stored.
     pub(crate) fn apply(&mut self, function: u16) {
