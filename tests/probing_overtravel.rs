@@ -329,3 +329,36 @@ fn a_touch_before_the_probing_feed_is_reached_asks_for_more_clearance() {
     );
     assert_eq!(err.line, 7);
 }
+
+#[test]
+fn bad_trigger_delay_and_overtravel_values_are_refused_when_the_machine_loads() {
+    let toml = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/probing-mill.toml"),
+    )
+    .expect("machine file");
+    // the preset table is not read by parse; only [probe] matters here
+    let toml = toml.replace("preset_table = \"probing.pr\"\nactive_preset = 1\n", "");
+    for (keys, says) in [
+        (
+            "trigger_delay = -0.001",
+            "trigger_delay must lie in 0 … 1 s",
+        ),
+        ("trigger_delay = 2.0", "trigger_delay must lie in 0 … 1 s"),
+        (
+            "overtravel = 0.0",
+            "probe overtravel must be a positive number",
+        ),
+        (
+            "overtravel = nan",
+            "probe overtravel must be a positive number",
+        ),
+        ("overtravel = \"1\"", "overtravel"),
+    ] {
+        let text = toml.replace(
+            "feed = 300.0           # probing feed, mm/min",
+            &format!("feed = 300.0\n{keys}"),
+        );
+        let err = MachineConfig::parse("bad.toml", &text).expect_err(keys);
+        assert!(err.to_string().contains(says), "{keys}: {err}");
+    }
+}
