@@ -205,3 +205,73 @@ pub enum ProbeError {
         what: String,
     },
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brakes from `v` by integrating the jerk phases step by step: jerk −j until the
+    /// deceleration reaches `a` (or until half the speed is gone), hold it, then +j back to
+    /// zero; returns the distance covered until the speed is zero.
+    fn integrate_stop(v: f64, a: f64, j: f64) -> f64 {
+        let dt = 1e-7;
+        let (mut s, mut speed, mut acc) = (0.0, v, 0.0f64);
+        // deceleration needed to stop from `speed` while ramping `acc` down at j: acc²/(2j)
+        while speed > 0.0 {
+            let ramp_down_loss = acc * acc / (2.0 * j);
+            let jerk = if speed <= ramp_down_loss {
+                j
+            } else if -acc < a {
+                -j
+            } else {
+                0.0
+            };
+            let next_acc = (acc + jerk * dt).max(-a).min(0.0);
+            let next_speed = speed + 0.5 * (acc + next_acc) * dt;
+            s += 0.5 * (speed + next_speed.max(0.0)) * dt;
+            speed = next_speed;
+            acc = next_acc;
+        }
+        s
+    }
+
+    #[test]
+    fn braking_distance_matches_a_step_by_step_stop() {
+        // below a²/j (the deceleration never reaches a) and above it
+        for (v, a, j) in [
+            (5.0, 2000.0, 50000.0),
+            (90.0, 1500.0, 40000.0),
+            (100.0, 2000.0, 50000.0),
+        ] {
+            let closed = ProbeStop::braking_distance(v, a, j);
+            let steps = integrate_stop(v, a, j);
+            assert!(
+                (closed - steps).abs() < 1e-5 * closed.max(1e-3),
+                "v {v}: closed form {closed}, integrated {steps}"
+            );
+        }
+        assert_eq!(ProbeStop::braking_distance(0.0, 1.0, 1.0), 0.0);
+    }
+
+    #[test]
+    fn the_tightest_axis_sets_the_limits_along_a_direction() {
+        let stop = ProbeStop {
+            trigger_delay: 0.01,
+            overtravel: None,
+            axes: [
+                [100.0, 1000.0, 10000.0],
+                [100.0, 2000.0, 40000.0],
+                [50.0, 500.0, 5000.0],
+            ],
+        };
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        // along X+Y at 45°: X's limits over cos 45°
+        let l = stop.path_limits([h, h, 0.0], 10.0);
+        assert!((l[1] - 1000.0 / h).abs() < 1e-9 && (l[2] - 10000.0 / h).abs() < 1e-9);
+        // a feed above Z's speed limit is cut to it
+        let (v, s) = stop.stop_distance([0.0, 0.0, -1.0], 80.0);
+        assert_eq!(v, 50.0);
+        let want = 0.01 * 50.0 + 25.0 * (50.0 / 500.0 + 500.0 / 5000.0);
+        assert!((s - want).abs() < 1e-12, "{s} against {want}");
+    }
+}
