@@ -23,6 +23,8 @@ pub struct ProbeData {
     pub feed: f64,
     /// Positioning feed between touch points, mm/min; `None`: rapid traverse.
     pub positioning_feed: Option<f64>,
+    /// How the axes stop after the trigger (a real probe); `None`: on the trigger point.
+    pub stop: Option<ProbeStop>,
 }
 
 impl Default for ProbeData {
@@ -33,7 +35,68 @@ impl Default for ProbeData {
             distance: 20.0,
             feed: 100.0,
             positioning_feed: None,
+            stop: None,
         }
+    }
+}
+
+/// How a real touch probe stops. The switch signal reaches the control `trigger_delay` after
+/// the stylus touches; only then do the axes brake from the probing feed, as hard as their
+/// acceleration and jerk limits allow. The axes therefore come to rest past the touch point
+/// by the stop distance, and the stylus deflects by as much; that must stay within the
+/// stylus's allowed deflection (its overtravel), which limits the probing feed. The
+/// position the cycle uses is the one latched at the trigger, not where the axes stopped.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProbeStop {
+    /// Time from the touch until the axes start braking, s.
+    pub trigger_delay: f64,
+    /// Allowed stylus deflection, mm; `None`: not checked.
+    pub overtravel: Option<f64>,
+    /// Largest speed (mm/s), acceleration (mm/s²) and jerk (mm/s³) of X, Y and Z.
+    pub axes: [[f64; 3]; 3],
+}
+
+impl ProbeStop {
+    /// Path speed, acceleration and jerk limits along the unit direction `dir` (X, Y, Z) at
+    /// the programmed speed `speed` (mm/s): on a straight line each axis carries its share
+    /// `|dir[i]|` of the path's motion, so the path may go as far as the tightest axis allows.
+    pub fn path_limits(&self, dir: [f64; 3], speed: f64) -> [f64; 3] {
+        let mut out = [speed, f64::INFINITY, f64::INFINITY];
+        for (u, lim) in dir.iter().zip(&self.axes) {
+            if u.abs() > 1e-12 {
+                for (o, l) in out.iter_mut().zip(lim) {
+                    *o = o.min(l / u.abs());
+                }
+            }
+        }
+        out
+    }
+
+    /// Distance a jerk-limited stop from speed `v` at zero acceleration takes with
+    /// acceleration limit `a` and jerk limit `j` (the same distance a start from rest to `v`
+    /// takes). The deceleration rises and falls with the jerk limit, holding `a` in between
+    /// when `v` is large enough to reach it (v ≥ a²/j); the profile is point-symmetric about
+    /// its middle, so the distance is the time it takes times v/2.
+    pub fn braking_distance(v: f64, a: f64, j: f64) -> f64 {
+        if v <= 0.0 {
+            return 0.0;
+        }
+        let time = if !j.is_finite() {
+            v / a
+        } else if v * j >= a * a {
+            v / a + a / j
+        } else {
+            2.0 * (v / j).sqrt()
+        };
+        v * time / 2.0
+    }
+
+    /// The probing speed (mm/s) along `dir` at the probing feed `speed` (mm/s) and how far
+    /// past the touch point the axes come to rest (mm): the distance covered during the
+    /// trigger delay plus the braking distance.
+    pub fn stop_distance(&self, dir: [f64; 3], speed: f64) -> (f64, f64) {
+        let [v, a, j] = self.path_limits(dir, speed);
+        (v, v * self.trigger_delay + Self::braking_distance(v, a, j))
     }
 }
 
@@ -99,6 +162,36 @@ pub enum ProbeError {
         /// Touch point of the cycle the probe was moving to, from 1.
         point: u32,
     },
+    /// The axes would stop further past the touch point than the stylus may deflect.
+    #[error(
+        "stylus deflection exceeds overtravel: TCH PROBE {cycle}, touch point {point}, the axes stop {stop:.4} mm past the touch point at the probing feed of {feed} mm/min, the stylus allows {allowed} mm (probing feed too high)"
+    )]
+    Overtravel {
+        /// Cycle number.
+        cycle: u32,
+        /// Touch point of the cycle, from 1.
+        point: u32,
+        /// The stop distance, mm.
+        stop: f64,
+        /// The allowed stylus deflection, mm.
+        allowed: f64,
+        /// The probing feed, mm/min.
+        feed: f64,
+    },
+    /// The probe touches before it reaches its probing feed.
+    #[error(
+        "too little clearance: TCH PROBE {cycle}, touch point {point}, the stylus touches {moved:.4} mm into its probing move but needs {run_up:.4} mm to reach the probing feed (more set-up clearance needed)"
+    )]
+    ShortRunUp {
+        /// Cycle number.
+        cycle: u32,
+        /// Touch point of the cycle, from 1.
+        point: u32,
+        /// How far the probe moved before it touched, mm.
+        moved: f64,
+        /// How far it needs to reach the probing feed, mm.
+        run_up: f64,
+    },
     /// A cycle number klar does not run.
     #[error("touch-probe cycle {0} not supported yet")]
     Unknown(u32),
@@ -118,4 +211,74 @@ pub enum ProbeError {
         /// What is wrong.
         what: String,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Brakes from `v` by integrating the jerk phases step by step: jerk −j until the
+    /// deceleration reaches `a` (or until half the speed is gone), hold it, then +j back to
+    /// zero; returns the distance covered until the speed is zero.
+    fn integrate_stop(v: f64, a: f64, j: f64) -> f64 {
+        let dt = 1e-7;
+        let (mut s, mut speed, mut acc) = (0.0, v, 0.0f64);
+        // deceleration needed to stop from `speed` while ramping `acc` down at j: acc²/(2j)
+        while speed > 0.0 {
+            let ramp_down_loss = acc * acc / (2.0 * j);
+            let jerk = if speed <= ramp_down_loss {
+                j
+            } else if -acc < a {
+                -j
+            } else {
+                0.0
+            };
+            let next_acc = (acc + jerk * dt).max(-a).min(0.0);
+            let next_speed = speed + 0.5 * (acc + next_acc) * dt;
+            s += 0.5 * (speed + next_speed.max(0.0)) * dt;
+            speed = next_speed;
+            acc = next_acc;
+        }
+        s
+    }
+
+    #[test]
+    fn braking_distance_matches_a_step_by_step_stop() {
+        // below a²/j (the deceleration never reaches a) and above it
+        for (v, a, j) in [
+            (5.0, 2000.0, 50000.0),
+            (90.0, 1500.0, 40000.0),
+            (100.0, 2000.0, 50000.0),
+        ] {
+            let closed = ProbeStop::braking_distance(v, a, j);
+            let steps = integrate_stop(v, a, j);
+            assert!(
+                (closed - steps).abs() < 1e-5 * closed.max(1e-3),
+                "v {v}: closed form {closed}, integrated {steps}"
+            );
+        }
+        assert_eq!(ProbeStop::braking_distance(0.0, 1.0, 1.0), 0.0);
+    }
+
+    #[test]
+    fn the_tightest_axis_sets_the_limits_along_a_direction() {
+        let stop = ProbeStop {
+            trigger_delay: 0.01,
+            overtravel: None,
+            axes: [
+                [100.0, 1000.0, 10000.0],
+                [100.0, 2000.0, 40000.0],
+                [50.0, 500.0, 5000.0],
+            ],
+        };
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        // along X+Y at 45°: X's limits over cos 45°
+        let l = stop.path_limits([h, h, 0.0], 10.0);
+        assert!((l[1] - 1000.0 / h).abs() < 1e-9 && (l[2] - 10000.0 / h).abs() < 1e-9);
+        // a feed above Z's speed limit is cut to it
+        let (v, s) = stop.stop_distance([0.0, 0.0, -1.0], 80.0);
+        assert_eq!(v, 50.0);
+        let want = 0.01 * 50.0 + 25.0 * (50.0 / 500.0 + 500.0 / 5000.0);
+        assert!((s - want).abs() < 1e-12, "{s} against {want}");
+    }
 }

@@ -5,7 +5,7 @@
 use super::MachineConfig;
 use super::probe_features::{self, HoleCircleConfig, RidgeConfig, SlotConfig};
 use crate::workpiece::{Bore, Boss, Pocket, SimWorkpiece};
-use klar_interp::{Interpreter, ProbeData};
+use klar_interp::{Interpreter, ProbeData, ProbeStop};
 use serde::Deserialize;
 
 /// `[probe]`: the touch probe's data (the TNC's touch-probe table).
@@ -27,6 +27,14 @@ pub struct ProbeConfig {
     /// Positioning feed between touch points, mm/min; none: rapid traverse.
     #[serde(default)]
     pub positioning_feed: Option<f64>,
+    /// Time from the touch until the control reacts, s. With it or `overtravel` the simulated
+    /// axes run past the touch point and brake as a real probe's do.
+    #[serde(default)]
+    pub trigger_delay: Option<f64>,
+    /// Allowed stylus deflection, mm: a probing move whose axes would stop further past the
+    /// touch point is refused.
+    #[serde(default)]
+    pub overtravel: Option<f64>,
 }
 
 fn default_radius() -> f64 {
@@ -128,9 +136,29 @@ impl MachineConfig {
                 distance: p.distance,
                 feed: p.feed,
                 positioning_feed: p.positioning_feed,
+                stop: self.probe_stop(p),
             },
             None => ProbeData::default(),
         }
+    }
+
+    /// How the axes stop after a trigger, when `[probe]` has `trigger_delay` or `overtravel`.
+    fn probe_stop(&self, p: &ProbeConfig) -> Option<ProbeStop> {
+        if p.trigger_delay.is_none() && p.overtravel.is_none() {
+            return None;
+        }
+        let limits = self.axis_limits();
+        let mut axes = [[f64::INFINITY; 3]; 3];
+        for (i, l) in limits.iter().take(3).enumerate() {
+            if let Some(l) = l {
+                axes[i] = [l.max_velocity, l.max_acceleration, l.max_jerk];
+            }
+        }
+        Some(ProbeStop {
+            trigger_delay: p.trigger_delay.unwrap_or(0.0),
+            overtravel: p.overtravel,
+            axes,
+        })
     }
 
     /// The simulated part of `[workpiece]`, placed from the start preset.
@@ -220,6 +248,14 @@ impl MachineConfig {
             }
             if let Some(f) = p.positioning_feed {
                 positive("probe positioning_feed", f)?;
+            }
+            if let Some(o) = p.overtravel {
+                positive("probe overtravel", o)?;
+            }
+            if let Some(t) = p.trigger_delay
+                && !(t.is_finite() && (0.0..=1.0).contains(&t))
+            {
+                return Err(format!("probe trigger_delay must lie in 0 … 1 s, got {t}"));
             }
         }
         if let Some(w) = &self.workpiece {

@@ -42,7 +42,7 @@ use crate::canopen::{Emergency, Master};
 /// CiA 402 drives on one CANopen bus, serving one machine axis each (and optionally a
 /// spindle, reached through [`Cia402Backend::spindle`]).
 pub struct Cia402Backend {
-    net: Arc<Mutex<Network>>,
+    pub(crate) net: Arc<Mutex<Network>>,
 }
 
 pub(crate) fn lock(net: &Mutex<Network>) -> MutexGuard<'_, Network> {

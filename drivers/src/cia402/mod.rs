@@ -11,6 +11,7 @@ pub mod scaling;
 mod setup;
 pub mod spindle;
 pub mod state;
+pub mod touch_probe;
 
 pub use backend::Cia402Backend;
 pub use config::{

@@ -57,6 +57,32 @@ pub const ERROR_CODE: u16 = 0x603F;
 /// Producer heartbeat time (u16, ms), CiA 301.
 pub const PRODUCER_HEARTBEAT: u16 = 0x1017;
 
+/// Touch probe function (u16, CiA 402-2): how the drive's touch-probe latches are armed.
+pub const TOUCH_PROBE_FUNCTION: u16 = 0x60B8;
+/// Touch probe status (u16): which latches are enabled and which hold a value.
+pub const TOUCH_PROBE_STATUS: u16 = 0x60B9;
+/// Touch probe 1 position latched at the positive edge (i32, counts).
+pub const TOUCH_PROBE_1_POSITIVE: u16 = 0x60BA;
+/// Touch probe 1 position latched at the negative edge (i32, counts).
+pub const TOUCH_PROBE_1_NEGATIVE: u16 = 0x60BB;
+
+/// 0x60B8 bit 0: touch probe 1 enabled.
+pub const TP_ENABLE: u16 = 1 << 0;
+/// 0x60B8 bit 1: keep latching every event (continuous); clear: only the first event.
+pub const TP_CONTINUOUS: u16 = 1 << 1;
+/// 0x60B8 bits 2–3: the trigger source of touch probe 1 (0: its touch-probe input).
+pub const TP_SOURCE_MASK: u16 = 0b11 << 2;
+/// 0x60B8 bit 4: latch at the positive edge of touch probe 1.
+pub const TP_POSITIVE_EDGE: u16 = 1 << 4;
+/// 0x60B8 bit 5: latch at the negative edge of touch probe 1.
+pub const TP_NEGATIVE_EDGE: u16 = 1 << 5;
+/// 0x60B9 bit 0: touch probe 1 is enabled.
+pub const TPS_ENABLED: u16 = 1 << 0;
+/// 0x60B9 bit 1: touch probe 1 holds a position latched at a positive edge (0x60BA).
+pub const TPS_POSITIVE_STORED: u16 = 1 << 1;
+/// 0x60B9 bit 2: touch probe 1 holds a position latched at a negative edge (0x60BB).
+pub const TPS_NEGATIVE_STORED: u16 = 1 << 2;
+
 /// Mode of operation: profile position.
 pub const MODE_PROFILE_POSITION: i8 = 1;
 /// Mode of operation: profile velocity.

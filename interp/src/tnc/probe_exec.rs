@@ -29,9 +29,15 @@
 //! - a positioning move on which the stylus meets the part stops the program (a collision of
 //!   the probe: on the machine the stylus deflects outside a probing move);
 //!
-//! Not modelled: the tilted working plane (probing is refused in it) and the stylus
-//! deflection after the trigger (the simulated axes stop on the trigger point, which the
-//! interpreter knows before the move). Q303=0 (the datum table): see [`super::probe_ref`].
+//! - with a real probe ([`ProbeStop`]) the probing move runs past the touch point by the
+//!   distance the axes need to stop (the trigger delay at the probing feed, then braking);
+//!   the measured position is the one latched at the trigger. A stop distance larger than
+//!   the stylus may deflect is refused before the move ("probing feed too high"), as is a
+//!   touch that comes before the probe can have reached its probing feed;
+//!
+//! Not modelled: the tilted working plane (probing is refused in it). Without a
+//! [`ProbeStop`] the axes stop on the trigger point, which the interpreter knows before the
+//! move. Q303=0 (the datum table): see [`super::probe_ref`].
 
 use std::collections::VecDeque;
 
@@ -43,7 +49,7 @@ use super::stmt::Parsed;
 use crate::cycles::{ParamKey, ParamSource};
 use crate::diag::ProgramError;
 use crate::op::{AxisLetter, Feed, Op, OpKind, Pose, PresetWrite, ProbeResult, SourceLoc};
-use crate::probe::{Probe, ProbeData, ProbeError};
+use crate::probe::{Probe, ProbeData, ProbeError, ProbeStop};
 
 /// A point in the working plane's axes: first axis, second axis, tool axis (mm).
 pub(super) type P3 = [f64; 3];
@@ -314,19 +320,71 @@ impl Machine {
                 point: run.point,
             }));
         }
-        let mut m_hit = m_start;
-        (
-            m_hit[AxisLetter::X],
-            m_hit[AxisLetter::Y],
-            m_hit[AxisLetter::Z],
-        ) = (h[0], h[1], h[2]);
-        let p_hit = self.cyc.xf.unmap_point(&m_hit);
         let (a, b, n) = self.plane.axes();
-        let trigger = [p_hit[a], p_hit[b], p_hit[n]];
-        self.probe_line(trigger, feed, run, out);
+        let to_plane = |m: &Machine, p: P3| {
+            let mut q = m_start;
+            (q[AxisLetter::X], q[AxisLetter::Y], q[AxisLetter::Z]) = (p[0], p[1], p[2]);
+            let q = m.cyc.xf.unmap_point(&q);
+            [q[a], q[b], q[n]]
+        };
+        let trigger = to_plane(self, h);
+        let stop = match self.probe.data.stop {
+            Some(s) => {
+                let o = self.overrun(&s, xyz(&m_start), xyz(&m_end), h, moved, run)?;
+                to_plane(self, o)
+            }
+            None => trigger,
+        };
+        self.probe_line(stop, feed, run, out);
         let back = self.positioning();
         self.probe_line(start, back, run, out);
         Ok(trigger)
+    }
+
+    /// Where the axes of a real probe come to rest (machine X, Y, Z) after touching at `hit`
+    /// on the probing move from `from` toward `to`, `moved` mm after its start: past the
+    /// touch point by the stop distance of [`ProbeStop`]. Refused when that exceeds the
+    /// stylus's overtravel, or when the probe touches before it can have reached its probing
+    /// feed (the stop distance assumes it probes at that feed).
+    fn overrun(
+        &self,
+        stop: &ProbeStop,
+        from: P3,
+        to: P3,
+        hit: P3,
+        moved: f64,
+        run: Run,
+    ) -> Result<P3, ExecError> {
+        let d = [to[0] - from[0], to[1] - from[1], to[2] - from[2]];
+        let len = d.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if len <= 0.0 {
+            return Ok(hit);
+        }
+        let dir = d.map(|v| v / len);
+        let feed = self.probe.data.feed;
+        let (v, s) = stop.stop_distance(dir, feed / 60.0);
+        if let Some(allowed) = stop.overtravel
+            && s > allowed
+        {
+            return Err(perr(ProbeError::Overtravel {
+                cycle: run.cycle,
+                point: run.point,
+                stop: s,
+                allowed,
+                feed,
+            }));
+        }
+        let [_, acc, jerk] = stop.path_limits(dir, feed / 60.0);
+        let run_up = ProbeStop::braking_distance(v, acc, jerk);
+        if moved < run_up {
+            return Err(perr(ProbeError::ShortRunUp {
+                cycle: run.cycle,
+                point: run.point,
+                moved,
+                run_up,
+            }));
+        }
+        Ok([0, 1, 2].map(|i| hit[i] + dir[i] * s))
     }
 
     /// Probes along `dir` from where the probe stands; the surface point touched.

@@ -72,6 +72,10 @@ pub(crate) fn drive_dictionary(node: u8, counts_per_unit: f64) -> ObjectDictiona
     od.add(INTERPOLATION_PERIOD, 2, &[(-3i8) as u8], rw, false);
     od.add(FOLLOWING_ERROR_ACTUAL, 0, &0i32.to_le_bytes(), ro, true);
     od.add(TARGET_VELOCITY, 0, &0i32.to_le_bytes(), rw, true);
+    od.add(TOUCH_PROBE_FUNCTION, 0, &0u16.to_le_bytes(), rw, true);
+    od.add(TOUCH_PROBE_STATUS, 0, &0u16.to_le_bytes(), ro, true);
+    od.add(TOUCH_PROBE_1_POSITIVE, 0, &0i32.to_le_bytes(), ro, true);
+    od.add(TOUCH_PROBE_1_NEGATIVE, 0, &0i32.to_le_bytes(), ro, true);
     // Velocity window: 60 units/s (10 rpm on a rotary axis).
     let window = (60.0 * counts_per_unit).round() as u32;
     od.add(VELOCITY_WINDOW, 0, &window.to_le_bytes(), rw, false);

@@ -43,6 +43,7 @@ use klar_motion::{AxisFault, AxisState, Setpoint};
 use super::dictionary::drive_dictionary;
 use super::od::{ObjectDictionary, SdoServer};
 use super::profile::{Profile, VelocityRamp};
+use super::touch_probe::{ProbeInput, TouchProbe};
 use crate::plant::{ServoPlant, SimAxisParams};
 
 /// EMCY code the simulated drive sends for a limit switch (device specific).
@@ -83,6 +84,7 @@ struct Shared {
     velocity: f64,
     state: Option<PowerState>,
     syncs: u64,
+    probe_input: Option<ProbeInput>,
 }
 
 impl SimDriveControl {
@@ -108,6 +110,12 @@ impl SimDriveControl {
     /// The drive's CiA 402 state (`None` before the first SYNC).
     pub fn power_state(&self) -> Option<PowerState> {
         self.lock().state
+    }
+
+    /// Wires the drive's touch-probe input to a trigger position (`None`: nothing
+    /// connected); see [`ProbeInput`].
+    pub fn set_probe_input(&self, input: Option<ProbeInput>) {
+        self.lock().probe_input = input;
     }
 
     /// SYNCs processed while operational.
@@ -172,6 +180,8 @@ pub struct SimCia402Drive {
     /// Velocity actual as the drive reports it: the encoder's position change per cycle,
     /// low-pass filtered, and the position it was last taken at.
     velocity_filter: (f64, Option<f64>),
+    /// Touch probe 1's latch.
+    touch: TouchProbe,
     control: SimDriveControl,
 }
 
@@ -205,6 +215,7 @@ impl SimCia402Drive {
             profile: None,
             setpoint_ack: false,
             velocity_filter: (0.0, None),
+            touch: TouchProbe::default(),
             control: control.clone(),
         };
         drive.reset_dictionary();
@@ -464,6 +475,7 @@ impl SimCia402Drive {
             _ => (0.0, 0.0),
         };
         self.last_setpoint = Some((position, velocity));
+        let before = self.plant.actual_position();
         let fb = self.plant.step(
             Setpoint {
                 position,
@@ -503,6 +515,15 @@ impl SimCia402Drive {
         let raw = last.map_or(0.0, |p| (measured - p) / dt);
         let alpha = (dt / VELOCITY_FILTER_TIME).min(1.0);
         self.velocity_filter = (filtered + (raw - filtered) * alpha, Some(measured));
+        let input = self.control.lock().probe_input;
+        self.touch.step(
+            self.od.u32(TOUCH_PROBE_FUNCTION, 0) as u16,
+            input,
+            (before, self.plant.actual_position()),
+            self.offset,
+            self.counts_per_unit(),
+        );
+        self.touch.publish(&mut self.od);
         self.publish(mode, target_units);
         let mut shared = self.control.lock();
         shared.position = self.plant.actual_position();
@@ -698,6 +719,7 @@ impl SimCia402Drive {
                 self.power = PowerState::SwitchOnDisabled;
                 self.offset = 0.0;
                 self.homed = false;
+                self.touch = TouchProbe::default();
                 self.boot(out);
             }
             Some(NmtCommand::ResetCommunication) => {
@@ -750,6 +772,10 @@ impl BusDevice for SimCia402Drive {
                 && let Some(answer) = self.sdo.handle(&mut self.od, frame.data())
             {
                 produced.push(CanFrame::fixed(SDO_TX_BASE + node, &answer));
+                // The touch-probe function acts at once as well.
+                self.touch
+                    .apply(self.od.u32(TOUCH_PROBE_FUNCTION, 0) as u16);
+                self.touch.publish(&mut self.od);
                 // The drive takes a new mode of operation at once.
                 let mode = self.od.u32(MODES_OF_OPERATION, 0);
                 self.od.set(MODES_DISPLAY, 0, mode);

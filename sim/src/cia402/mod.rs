@@ -6,8 +6,10 @@ mod dictionary;
 pub mod drive;
 pub mod od;
 mod profile;
+mod touch_probe;
 
 pub use drive::{Injection, SimCia402Drive, SimDriveConfig, SimDriveControl};
+pub use touch_probe::ProbeInput;
 
 use klar_drivers::can::CanError;
 use klar_drivers::can::device::DeviceRunner;
