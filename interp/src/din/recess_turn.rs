@@ -330,6 +330,11 @@ pub(crate) fn run(
             "G869 needs a FINISHED PART contour (with elements from NS to NE)",
         ));
     };
+    if super::grooving::is_axial(segs) {
+        return Err(ProgramError::NotSupported(
+            "axial G869 (a section that spans more along X than along Z)".into(),
+        ));
+    }
     let ends = |s: &Seg| match *s {
         Seg::Line { a, b } | Seg::Arc { a, b, .. } => (a, b),
     };
