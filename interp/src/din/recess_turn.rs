@@ -258,10 +258,10 @@ impl Area<'_> {
         p
     }
 
-    /// The stretch of reference positions from which the tool reaches down to `x`.
-    fn stretch(&self, x: f64) -> Result<[f64; 2], ProgramError> {
-        let p = self.probes();
-        let ok: Vec<bool> = p.iter().map(|z| self.reach(*z) <= x + 1e-9).collect();
+    /// The stretch of reference positions from which the tool reaches down to `x`, given
+    /// the probes `p` with their reaches `r`.
+    fn stretch(&self, p: &[f64], r: &[f64], x: f64) -> Result<[f64; 2], ProgramError> {
+        let ok: Vec<bool> = r.iter().map(|v| *v <= x + 1e-9).collect();
         let first = ok.iter().position(|o| *o);
         let last = ok.iter().rposition(|o| *o);
         let (Some(i), Some(j)) = (first, last) else {
@@ -287,7 +287,7 @@ impl Area<'_> {
 
     /// Bisects between a place `inside` that reaches `x` and one `outside` that does not.
     fn boundary(&self, mut inside: f64, mut outside: f64, x: f64) -> f64 {
-        for _ in 0..80 {
+        for _ in 0..60 {
             let mid = 0.5 * (inside + outside);
             if self.reach(mid) <= x + 1e-9 {
                 inside = mid;
@@ -385,10 +385,11 @@ pub(crate) fn run(
     let ne_end = |s: [f64; 2]| if towards_minus { s[0] } else { s[1] };
 
     if c.variant != 2 {
-        let bottom = area
-            .probes()
+        let probes = area.probes();
+        let reach: Vec<f64> = probes.iter().map(|z| area.reach(*z)).collect();
+        let bottom = reach
             .iter()
-            .map(|z| area.reach(*z))
+            .copied()
             .fold(f64::INFINITY, f64::min)
             .max(c.x_limit.unwrap_or(f64::NEG_INFINITY));
         let depth = top - bottom;
@@ -416,7 +417,7 @@ pub(crate) fn run(
             .collect();
         let stretches = levels
             .iter()
-            .map(|x| area.stretch(*x))
+            .map(|x| area.stretch(&probes, &reach, *x))
             .collect::<Result<Vec<_>, _>>()?;
         let z0 = ns_end(stretches[0]);
         go(lathe, z0, clear, Feed::Rapid, loc, out);
