@@ -229,6 +229,31 @@ fn g869_x_limit_stops_the_levels() {
 }
 
 #[test]
+fn g869_z_limit_keeps_the_tool_above_it() {
+    // Z-30: the tool's −Z edge stays at Z-30 or above, so its +Z corner turns from Z-20
+    // to Z-26 only; the levels are those of the whole recess (r22.5, 20, 17.5, 15)
+    let text = program().replace("N23 G869 NS4", "N23 G869 Z-30 Q1 NS4");
+    let ops = run_text(&text).unwrap();
+    let turns: Vec<_> = moves(&ops, 23)
+        .into_iter()
+        .filter(|c| c.0 == Feed::PerRevolution(0.1))
+        .collect();
+    assert_eq!(turns.len(), 4, "{turns:?}");
+    for (t, x) in turns.iter().zip([22.5, 20.0, 17.5, 15.0]) {
+        let mut zs = [t.1[0], t.2[0]];
+        zs.sort_by(f64::total_cmp);
+        assert!(
+            (zs[0] + 26.0).abs() < 1e-9 && (zs[1] + 20.0).abs() < 1e-9,
+            "{t:?}"
+        );
+        assert!(
+            (t.1[1] - x).abs() < 1e-9 && (t.2[1] - x).abs() < 1e-9,
+            "{t:?}"
+        );
+    }
+}
+
+#[test]
 fn g869_errors_name_what_is_wrong() {
     let text = program();
     let with = |cycle: &str| run_text(&text.replace("N23 G869 NS4 SB4 P3 O0.05 E0.04", cycle));
