@@ -21,7 +21,7 @@
 //! Patterns and cycles live in their own files: G745 and G743 face patterns with G71, G74,
 //! G36 and G791 (`cycles`), G744 and G746 lateral patterns drilling radially (`lateral`),
 //! G793 face contour milling (`facemill`), G810/G820 roughing (`roughing`), G860/G866/G870
-//! recessing (`grooving`).
+//! recessing (`grooving`), G869 recess turning (`recess_turn`).
 
 use std::collections::{HashMap, VecDeque};
 
@@ -681,6 +681,25 @@ impl DinExec {
                 super::parallel::rough(l, &segs, self.blank, &p, loc, out)
                     .map_err(|e| (gpos, e))?;
             }
+            Some(869) => {
+                Self::check_words(g, &super::recess_turn::G869_WORDS[..], "G869")?;
+                let ns = g.get("NS").map(|w| whole(w, "NS")).transpose()?;
+                if let (Some(w), Some(n)) = (g.get("NE"), ns)
+                    && whole(w, "NE")? == n
+                {
+                    return Err(err_at(
+                        w,
+                        ProgramError::NotSupported(
+                            "G869 with NS = NE (the element against its direction)".into(),
+                        ),
+                    ));
+                }
+                let ne = g.get("NE").map(|w| whole(w, "NE")).transpose()?;
+                let (ns, ne) = (ns.map(u64::from), ne.map(u64::from).or(ns.map(u64::from)));
+                let p = super::recess_turn::params(l, g)?;
+                let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
+                super::recess_turn::run(l, &segs, &p, loc, out).map_err(|e| (gpos, e))?;
+            }
             Some(code @ (860 | 866 | 870)) => {
                 self.recessing(g, code, loc, out)?;
             }
@@ -704,7 +723,6 @@ impl DinExec {
             Some(other) => {
                 let name = match other {
                     792 | 794 | 797 | 798 => Some("contour milling cycles other than G793"),
-                    869 => Some("recess turning G869"),
                     72 | 73 => Some("boring and tapping cycles G72/G73"),
                     _ => None,
                 };

@@ -32,8 +32,14 @@
 //! to the highest point of the contour (shifted by the allowances I — a diameter value —
 //! and K) under the tool's width. Q0 (default) roughs and finishes, Q1 only roughs, Q2 only
 //! finishes; the finishing pass runs along the same envelope at the feed E (default: the
-//! active feed) from the upper edge to the lower and out. Axial recessing with G860 is not
-//! supported.
+//! active feed) from the upper edge to the lower and out.
+//!
+//! G860 works radially or axially (the manual's "axially/radially from NS to NE"): klar
+//! takes a section that spans more along X than along Z from its first point to its last
+//! as a recess in the front face and cuts it axially: the same plunges along −Z, the tool's
+//! width along X with its reference at the +X corner (it covers x − P … x), the area
+//! reaching up to the Z where the tool stands; at the end out along Z first, then along X
+//! back to the start (radially: X first, then Z).
 
 use std::collections::VecDeque;
 
@@ -427,7 +433,44 @@ pub(crate) fn envelope(segs: &[Seg], lo: f64, hi: f64) -> Option<f64> {
     best
 }
 
+/// The element with Z and X exchanged (a mirror: arcs turn the other way).
+fn swapped(s: &Seg) -> Seg {
+    let m = |p: [f64; 2]| [p[1], p[0]];
+    match *s {
+        Seg::Line { a, b } => Seg::Line { a: m(a), b: m(b) },
+        Seg::Arc {
+            a,
+            b,
+            centre,
+            sweep,
+        } => Seg::Arc {
+            a: m(a),
+            b: m(b),
+            centre: m(centre),
+            sweep: -sweep,
+        },
+    }
+}
+
+/// Whether G860 works axially on `segs`: the section spans more along X than along Z
+/// from its first point to its last (a recess in a face).
+pub(crate) fn is_axial(segs: &[Seg]) -> bool {
+    let ends = |s: &Seg| match *s {
+        Seg::Line { a, b } | Seg::Arc { a, b, .. } => (a, b),
+    };
+    match (segs.first(), segs.last()) {
+        (Some(f), Some(l)) => {
+            let (a, b) = (ends(f).0, ends(l).1);
+            (b[1] - a[1]).abs() > (b[0] - a[0]).abs() + 1e-9
+        }
+        _ => false,
+    }
+}
+
 /// Runs G860 over the contour elements `segs` from where the tool stands.
+///
+/// The cycle is worked out in a frame (u, v) where u runs along the tool's width and the
+/// tool plunges towards −v: (Z, X radius) radially, (X radius, Z) axially.
 pub(crate) fn cut_area(
     lathe: &mut Lathe,
     segs: &[Seg],
@@ -440,28 +483,45 @@ pub(crate) fn cut_area(
             "G860 needs a FINISHED PART contour (with elements from NS to NE)",
         ));
     }
-    let segs: Vec<Seg> = segs.iter().map(|s| s.shifted(a.allowance)).collect();
+    let axial = is_axial(segs);
+    // (u, v) ↔ (z, x)
+    let to_zx = |q: [f64; 2]| if axial { [q[1], q[0]] } else { q };
+    let segs: Vec<Seg> = segs
+        .iter()
+        .map(|s| {
+            let s = s.shifted(a.allowance);
+            if axial { swapped(&s) } else { s }
+        })
+        .collect();
+    let at = |q: [f64; 2], base: Pose| pose(to_zx(q), base);
     let pts: Vec<[f64; 2]> = segs.iter().flat_map(Seg::samples).collect();
     let lo = pts.iter().map(|q| q[0]).fold(f64::INFINITY, f64::min);
     let hi = pts.iter().map(|q| q[0]).fold(f64::NEG_INFINITY, f64::max);
     let top = pts.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max);
-    let start = [lathe.pos[AxisLetter::Z], lathe.pos[AxisLetter::X]];
+    let start = to_zx([lathe.pos[AxisLetter::Z], lathe.pos[AxisLetter::X]]);
     if start[1] < top - 1e-9 {
-        return Err(ProgramError::Geometry(format!(
-            "G860 starts at X{:.3}, below the area's top X{:.3}: stand above it",
-            start[1] * 2.0,
-            top * 2.0
-        )));
+        return Err(ProgramError::Geometry(if axial {
+            format!(
+                "G860 starts at Z{:.3}, behind the face recess's top Z{:.3}: stand in front of it",
+                start[1], top
+            )
+        } else {
+            format!(
+                "G860 starts at X{:.3}, below the area's top X{:.3}: stand above it",
+                start[1] * 2.0,
+                top * 2.0
+            )
+        }));
     }
     let clear = start[1];
     let places = positions(lo, hi, a.width)?;
     let depth = |c: f64| envelope(&segs, c - a.width, c).unwrap_or(top);
-    lathe.line(pose([places[0], clear], lathe.pos), Feed::Rapid, loc, out);
+    lathe.line(at([places[0], clear], lathe.pos), Feed::Rapid, loc, out);
     if a.variant != 2 {
         for c in &places {
-            lathe.line(pose([*c, clear], lathe.pos), Feed::Rapid, loc, out);
-            lathe.line(pose([*c, depth(*c)], lathe.pos), a.feed, loc, out);
-            lathe.line(pose([*c, clear], lathe.pos), Feed::Rapid, loc, out);
+            lathe.line(at([*c, clear], lathe.pos), Feed::Rapid, loc, out);
+            lathe.line(at([*c, depth(*c)], lathe.pos), a.feed, loc, out);
+            lathe.line(at([*c, clear], lathe.pos), Feed::Rapid, loc, out);
         }
     }
     if a.variant != 1 {
@@ -475,14 +535,16 @@ pub(crate) fn cut_area(
             .collect();
         stops.sort_by(|x, y| y.total_cmp(x));
         stops.dedup_by(|x, y| (*x - *y).abs() < 1e-9);
-        lathe.line(pose([hi, clear], lathe.pos), Feed::Rapid, loc, out);
+        lathe.line(at([hi, clear], lathe.pos), Feed::Rapid, loc, out);
+        let mut u = hi;
         for z in stops {
-            lathe.line(pose([z, depth(z)], lathe.pos), a.finish, loc, out);
+            lathe.line(at([z, depth(z)], lathe.pos), a.finish, loc, out);
+            u = z;
         }
-        let back = [lathe.pos[AxisLetter::Z], clear];
-        lathe.line(pose(back, lathe.pos), a.finish, loc, out);
+        lathe.line(at([u, clear], lathe.pos), a.finish, loc, out);
     }
-    lathe.line(pose(start, lathe.pos), Feed::Rapid, loc, out);
+    // out along the plunge axis first (it is at the clearance already), then across
+    lathe.line(at(start, lathe.pos), Feed::Rapid, loc, out);
     Ok(())
 }
 

@@ -1,0 +1,296 @@
+//! Recess turning G869: the levels, plunge places and turning stretches against values
+//! worked out by hand, the finishing path, and a check that no cut enters the contour.
+
+use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
+
+fn program() -> String {
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../programs/lathe/recess_turn_g869.nc");
+    std::fs::read_to_string(p).unwrap()
+}
+
+fn run_text(text: &str) -> Result<Vec<Op>, String> {
+    Interpreter::from_source("t.nc", text, Pose::ZERO)
+        .map(|r| r.map_err(|d| d.to_string()))
+        .collect()
+}
+
+/// (z, x radius) of a pose.
+fn zx(p: &Pose) -> [f64; 2] {
+    [p[AxisLetter::Z], p[AxisLetter::X]]
+}
+
+/// The moves of the block with number `n` as (feed, from, to).
+fn moves(ops: &[Op], n: u64) -> Vec<(Feed, [f64; 2], [f64; 2])> {
+    ops.iter()
+        .filter(|o| o.loc.block == Some(n))
+        .filter_map(|o| match o.kind {
+            OpKind::Line { from, to, feed } => Some((feed, zx(&from), zx(&to))),
+            _ => None,
+        })
+        .collect()
+}
+
+#[track_caller]
+fn check(got: &[(Feed, [f64; 2], [f64; 2])], want: &[(Feed, [f64; 2])]) {
+    assert_eq!(got.len(), want.len(), "{got:?}");
+    for (i, (g, w)) in got.iter().zip(want).enumerate() {
+        assert_eq!(g.0, w.0, "move {i}: {g:?}");
+        assert!(
+            (g.2[0] - w.1[0]).abs() < 1e-8 && (g.2[1] - w.1[1]).abs() < 1e-8,
+            "move {i}: {:?} != {:?}",
+            g.2,
+            w.1
+        );
+    }
+}
+
+const RAPID: Feed = Feed::Rapid;
+
+#[test]
+fn g869_on_a_g22_recess_plunges_and_turns_back_and_forth() {
+    let ops = run_text(&program()).unwrap();
+    // recess Z-20..-40, Ø50 surface (r25), floor Ø30 (r15); SB4: the +Z corner runs from
+    // Z-20 down to Z-36. Depth 10 with P3: ceil(10/3) = 4 levels of 2.5 → r22.5, 20, 17.5,
+    // 15. The tool starts at X54 Z5 (r27); the safety distance above r25 is r26.
+    let (f, o, e) = (
+        Feed::PerRevolution(0.1),
+        Feed::PerRevolution(0.05),
+        Feed::PerRevolution(0.04),
+    );
+    let want = [
+        (RAPID, [-20.0, 27.0]),
+        (RAPID, [-20.0, 26.0]),
+        (o, [-20.0, 22.5]),
+        (f, [-36.0, 22.5]),
+        (o, [-36.0, 20.0]),
+        (f, [-20.0, 20.0]),
+        (o, [-20.0, 17.5]),
+        (f, [-36.0, 17.5]),
+        (o, [-36.0, 15.0]),
+        (f, [-20.0, 15.0]),
+        (RAPID, [-20.0, 26.0]),
+        // finishing: down the wall at Z-20, along the floor, up the wall at Z-40
+        (e, [-20.0, 15.0]),
+        (e, [-36.0, 15.0]),
+        (e, [-36.0, 26.0]),
+        // out in X, then back along Z
+        (RAPID, [-36.0, 27.0]),
+        (RAPID, [5.0, 27.0]),
+    ];
+    check(&moves(&ops, 23), &want);
+}
+
+/// The sloped recess of the program (N7…N9): r30 at Z-70 down to r22 at Z-74, flat to
+/// Z-84, up to r30 at Z-88. The highest point strictly between `lo` and `hi`.
+fn sloped(lo: f64, hi: f64) -> f64 {
+    let x = |z: f64| {
+        if z >= -74.0 {
+            30.0 + 2.0 * (z + 70.0)
+        } else if z >= -84.0 {
+            22.0
+        } else {
+            22.0 + 2.0 * (-84.0 - z)
+        }
+    };
+    // piecewise linear: the highest point is at an end or a corner
+    [lo, hi, -74.0, -84.0]
+        .into_iter()
+        .filter(|z| *z >= lo && *z <= hi)
+        .map(x)
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
+#[test]
+fn g869_with_oversizes_and_one_way_passes_on_sloped_walls() {
+    let ops = run_text(&program()).unwrap();
+    // SB3, K0.5, I1 (0.5 radius): standing at z the tool may reach the highest point
+    // under z−3.5…z+0.5, plus 0.5. Lowest: 22.5 (z from -80.5 to -74.5). Depth from r30:
+    // 7.5 with P3 → 3 levels of 2.5: r27.5, 25, 22.5. On the left wall 2z + 171.5 = x,
+    // on the right wall −138.5 − 2z = x:
+    //   r27.5: Z-72 … -83, r25: Z-73.25 … -81.75, r22.5: Z-74.5 … -80.5.
+    // Start X64 Z-65 (r32), safety r31. Every pass runs from the NS end (+Z) to the NE end.
+    let f = Feed::PerRevolution(0.1);
+    let want = [
+        (RAPID, [-72.0, 32.0]),
+        (RAPID, [-72.0, 31.0]),
+        (f, [-72.0, 27.5]),
+        (f, [-83.0, 27.5]),
+        (RAPID, [-83.0, 31.0]),
+        (RAPID, [-73.25, 31.0]),
+        (RAPID, [-73.25, 28.5]),
+        (f, [-73.25, 25.0]),
+        (f, [-81.75, 25.0]),
+        (RAPID, [-81.75, 31.0]),
+        (RAPID, [-74.5, 31.0]),
+        (RAPID, [-74.5, 26.0]),
+        (f, [-74.5, 22.5]),
+        (f, [-80.5, 22.5]),
+        (RAPID, [-80.5, 31.0]),
+        // finishing on the contour itself, the tool's edges meeting its corners
+        (RAPID, [-70.0, 31.0]),
+        (f, [-70.0, sloped(-73.0, -70.0)]),
+        (f, [-71.0, sloped(-74.0, -71.0)]),
+        (f, [-74.0, sloped(-77.0, -74.0)]),
+        (f, [-81.0, sloped(-84.0, -81.0)]),
+        (f, [-84.0, sloped(-87.0, -84.0)]),
+        (f, [-85.0, sloped(-88.0, -85.0)]),
+        (f, [-85.0, 31.0]),
+        (RAPID, [-85.0, 32.0]),
+        (RAPID, [-65.0, 32.0]),
+    ];
+    check(&moves(&ops, 25), &want);
+    assert!((sloped(-77.0, -74.0) - 22.0).abs() < 1e-12);
+    assert!((sloped(-74.0, -71.0) - 28.0).abs() < 1e-12);
+}
+
+/// The FINISHED PART contour of the program as (z, x radius) corners.
+const CONTOUR: [[f64; 2]; 14] = [
+    [0.0, 0.0],
+    [0.0, 25.0],
+    [-20.0, 25.0],
+    [-20.0, 15.0],
+    [-40.0, 15.0],
+    [-40.0, 25.0],
+    [-60.0, 25.0],
+    [-60.0, 30.0],
+    [-70.0, 30.0],
+    [-74.0, 22.0],
+    [-84.0, 22.0],
+    [-88.0, 30.0],
+    [-100.0, 30.0],
+    [-100.0, 0.0],
+];
+
+/// How far the tool (`w` wide, +Z corner at `p`) reaches below the contour: the largest
+/// contour height inside its width minus the tool's height (≤ 0 when clear).
+fn overlap(p: [f64; 2], w: f64) -> f64 {
+    let (lo, hi) = (p[0] - w + 1e-9, p[0] - 1e-9);
+    let mut worst = f64::NEG_INFINITY;
+    for s in CONTOUR.windows(2) {
+        let (a, b) = (s[0], s[1]);
+        for t in 0..=200 {
+            let t = f64::from(t) / 200.0;
+            let q = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            if q[0] > lo && q[0] < hi {
+                worst = worst.max(q[1] - p[1]);
+            }
+        }
+    }
+    worst
+}
+
+#[test]
+fn g869_never_cuts_into_the_contour() {
+    let ops = run_text(&program()).unwrap();
+    for (n, w) in [(23, 4.0), (25, 3.0)] {
+        for (_, from, to) in moves(&ops, n) {
+            for k in 0..=50 {
+                let t = f64::from(k) / 50.0;
+                let p = [
+                    from[0] + t * (to[0] - from[0]),
+                    from[1] + t * (to[1] - from[1]),
+                ];
+                assert!(overlap(p, w) < 1e-6, "N{n}: {p:?} cuts the contour");
+            }
+        }
+    }
+}
+
+#[test]
+fn g869_q1_roughs_only_and_q2_finishes_only() {
+    let text = program();
+    let rough = run_text(&text.replace("N23 G869 NS4", "N23 G869 Q1 NS4")).unwrap();
+    let m = moves(&rough, 23);
+    assert!(m.iter().all(|c| c.0 != Feed::PerRevolution(0.04)), "{m:?}");
+    assert_eq!(m.len(), 13, "{m:?}");
+    let finish = run_text(&text.replace("N23 G869 NS4", "N23 G869 Q2 NS4")).unwrap();
+    let m = moves(&finish, 23);
+    let cuts: Vec<_> = m.iter().filter(|c| c.0 != RAPID).collect();
+    assert_eq!(cuts.len(), 3, "{m:?}");
+    assert!(cuts.iter().all(|c| c.0 == Feed::PerRevolution(0.04)));
+}
+
+#[test]
+fn g869_x_limit_stops_the_levels() {
+    // X36: no cut below r18 → depth 7 with P3: 3 levels of 7/3
+    let text = program().replace("N23 G869 NS4", "N23 G869 X36 Q1 NS4");
+    let ops = run_text(&text).unwrap();
+    let plunges: Vec<f64> = moves(&ops, 23)
+        .iter()
+        .filter(|c| c.0 == Feed::PerRevolution(0.05))
+        .map(|c| c.2[1])
+        .collect();
+    let want = [25.0 - 7.0 / 3.0, 25.0 - 14.0 / 3.0, 18.0];
+    assert_eq!(plunges.len(), 3, "{plunges:?}");
+    for (g, w) in plunges.iter().zip(want) {
+        assert!((g - w).abs() < 1e-9, "{plunges:?}");
+    }
+}
+
+#[test]
+fn g869_z_limit_keeps_the_tool_above_it() {
+    // Z-30: the tool's −Z edge stays at Z-30 or above, so its +Z corner turns from Z-20
+    // to Z-26 only; the levels are those of the whole recess (r22.5, 20, 17.5, 15)
+    let text = program().replace("N23 G869 NS4", "N23 G869 Z-30 Q1 NS4");
+    let ops = run_text(&text).unwrap();
+    let turns: Vec<_> = moves(&ops, 23)
+        .into_iter()
+        .filter(|c| c.0 == Feed::PerRevolution(0.1))
+        .collect();
+    assert_eq!(turns.len(), 4, "{turns:?}");
+    for (t, x) in turns.iter().zip([22.5, 20.0, 17.5, 15.0]) {
+        let mut zs = [t.1[0], t.2[0]];
+        zs.sort_by(f64::total_cmp);
+        assert!(
+            (zs[0] + 26.0).abs() < 1e-9 && (zs[1] + 20.0).abs() < 1e-9,
+            "{t:?}"
+        );
+        assert!(
+            (t.1[1] - x).abs() < 1e-9 && (t.2[1] - x).abs() < 1e-9,
+            "{t:?}"
+        );
+    }
+}
+
+#[test]
+fn g869_errors_name_what_is_wrong() {
+    let text = program();
+    let with = |cycle: &str| run_text(&text.replace("N23 G869 NS4 SB4 P3 O0.05 E0.04", cycle));
+    let e = with("N23 G869 NS4 P3").unwrap_err();
+    assert!(e.contains("cutting width SB"), "{e}");
+    assert!(e.starts_with("t.nc:22:5:"), "{e}");
+    let e = with("N23 G869 NS4 SB4").unwrap_err();
+    assert!(e.contains("largest infeed P"), "{e}");
+    let e = with("N23 G869 NS4 SB30 P3").unwrap_err();
+    assert!(e.contains("narrower than SB30"), "{e}");
+    let e = with("N23 G869 NS7 NE7 SB3 P3").unwrap_err();
+    assert!(e.contains("NS = NE"), "{e}");
+    let e = with("N23 G869 NS4 SB4 P3 B1").unwrap_err();
+    assert!(e.contains("not supported") || e.contains("G869 B"), "{e}");
+    let e = with("N23 G869 NS4 SB4 P-3").unwrap_err();
+    assert!(e.contains("must be positive"), "{e}");
+    let e = with("N23 G869 NS4 SB4 P3 Q3").unwrap_err();
+    assert!(e.contains("expected 0 to 2"), "{e}");
+    let e = with("N22 G0 X40 Z5\nN23 G869 NS4 SB4 P3").unwrap_err();
+    assert!(e.contains("below the area's top"), "{e}");
+    // the whole contour from N4 to N9 has two valleys at the depth of the first level
+    let e = with("N22 G0 X64 Z5\nN23 G869 NS4 NE9 SB3 P3").unwrap_err();
+    assert!(e.contains("several valleys"), "{e}");
+}
+
+#[test]
+fn g869_refuses_more_levels_than_it_cuts() {
+    // depth 10 with P0.004: 2500 levels
+    let text = program().replace("N23 G869 NS4 SB4 P3", "N23 G869 NS4 SB4 P0.004");
+    let e = run_text(&text).unwrap_err();
+    assert!(e.contains("more than 2000"), "{e}");
+    // P0.005: exactly 2000 levels of 0.005, each a plunge
+    let text = program().replace("N23 G869 NS4 SB4 P3", "N23 G869 NS4 SB4 P0.005 Q1");
+    let ops = run_text(&text).unwrap();
+    let plunges = moves(&ops, 23)
+        .iter()
+        .filter(|c| c.0 == Feed::PerRevolution(0.05))
+        .count();
+    assert_eq!(plunges, 2000);
+}
