@@ -90,3 +90,93 @@ pub(super) struct MoveHold {
     /// The path position of the placed standstill.
     pub(super) at: Option<f64>,
 }
+
+#[cfg(test)]
+mod tests {
+    use super::super::Step;
+    use super::super::test_machine::planner;
+    use klar_interp::{Feed, Op, OpKind, Pose, SourceLoc};
+
+    fn line(from: [f64; 3], to: [f64; 3], line: u32) -> Op {
+        Op {
+            kind: OpKind::Line {
+                from: Pose::xyz(from[0], from[1], from[2]),
+                to: Pose::xyz(to[0], to[1], to[2]),
+                feed: Feed::Rate(100.0),
+            },
+            loc: SourceLoc {
+                line,
+                ..SourceLoc::default()
+            },
+        }
+    }
+
+    #[test]
+    fn a_hold_after_the_move_rests_at_its_end_and_resumes() {
+        let mut p = planner();
+        // Up Y 20 mm, then along X 30 mm, then up Z 5 mm: two corners (blended within
+        // the 0.01 mm tolerance).
+        let mut ops = vec![
+            line([0.0; 3], [0.0, 20.0, 0.0], 1),
+            line([0.0, 20.0, 0.0], [30.0, 20.0, 0.0], 2),
+            line([30.0, 20.0, 0.0], [30.0, 20.0, 5.0], 3),
+        ]
+        .into_iter();
+        p.hold_after_move();
+        assert!(p.hold_pending() && !p.is_held());
+        let mut poses = Vec::new();
+        let mut held_at = None;
+        for cycle in 0..5000 {
+            while p.needs_input() {
+                match ops.next() {
+                    Some(op) => p.push(op).expect("op accepted"),
+                    None => p.finish(),
+                }
+            }
+            if held_at.is_none() && p.is_held() {
+                held_at = Some(cycle);
+            }
+            if held_at.is_some_and(|h| cycle == h + 1000) {
+                p.resume();
+            }
+            match p.next_step() {
+                Some(Step::Sample(s)) => poses.push(s.pose.0),
+                Some(Step::Event(_)) => {}
+                None => break,
+            }
+        }
+        let h = held_at.expect("the hold took effect");
+        // At rest at the end of the first move (Y 20, within the corner tolerance), for
+        // every cycle of the hold.
+        let rest = poses[h];
+        assert!(
+            rest[0].abs() <= 0.01 && (rest[1] - 20.0).abs() <= 0.01 && rest[2] == 0.0,
+            "{rest:?}"
+        );
+        for q in &poses[h..h + 1000] {
+            assert_eq!(q, &rest);
+        }
+        // Moving right up to it: the hold did not brake early (the last 10 µm before it
+        // were covered in the last 20 cycles).
+        let before = poses[h - 20];
+        let gap = ((rest[0] - before[0]).powi(2) + (rest[1] - before[1]).powi(2)).sqrt();
+        assert!(gap > 0.01, "crept in: {gap} mm in 20 cycles");
+        // The resume runs the rest of the path to its end.
+        let end = poses[poses.len() - 1];
+        assert!(
+            (end[0] - 30.0).abs() < 1e-9
+                && (end[1] - 20.0).abs() < 1e-9
+                && (end[2] - 5.0).abs() < 1e-9,
+            "{end:?}"
+        );
+        assert!(!p.hold_pending());
+    }
+
+    #[test]
+    fn resume_cancels_a_pending_hold() {
+        let mut p = planner();
+        p.hold_after_move();
+        p.resume();
+        assert!(!p.hold_pending() && !p.is_held());
+    }
+}
