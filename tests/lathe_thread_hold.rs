@@ -193,3 +193,58 @@ fn a_hold_in_a_thread_pass_finishes_the_pass_and_the_retract() {
 fn a_hold_in_a_thread_pass_on_canopen_drives_finishes_the_pass_and_the_retract() {
     hold_in_a_thread_pass(&lathe_canopen());
 }
+
+/// `tapping_g36.nc` (M8×1.25 from Z2 to Z-12) with a hold asked for half-way down.
+fn hold_in_a_rigid_tap(machine: &MachineConfig) {
+    let held = run_with_hold(&program("lathe/tapping_g36.nc"), machine, |s| {
+        s.commanded[0].abs() < 1e-9 && s.commanded[1] < -6.0
+    });
+    let trace = &held.trace;
+    let (t, z, za, s) = (
+        &trace.t,
+        col_of(trace, "Z"),
+        col_of(trace, "Z_act"),
+        col_of(trace, "S_deg"),
+    );
+    let rows: Vec<usize> = (0..t.len())
+        .filter(|&i| t[i] > held.asked && t[i] <= held.resumed)
+        .collect();
+    // The tap goes on to the bottom and back out to its start Z2, geared to the angle all
+    // the way (through the reversal), and stands there until the resume.
+    let bottom = rows.iter().map(|&i| z[i]).fold(f64::INFINITY, f64::min);
+    assert!((bottom + 12.0).abs() < 0.01, "went down to Z {bottom}");
+    let rest = rows
+        .iter()
+        .copied()
+        .find(|&i| (z[i] - 2.0).abs() < 1e-9)
+        .expect("the tap comes back out");
+    let geared: Vec<usize> = rows.iter().copied().filter(|&i| i <= rest).collect();
+    let zs: Vec<f64> = geared.iter().map(|&i| z[i]).collect();
+    let zas: Vec<f64> = geared.iter().map(|&i| za[i]).collect();
+    let angles: Vec<f64> = geared.iter().map(|&i| s[i]).collect();
+    let lead = lead_error(&zs, &angles, 1.25, 1.0);
+    let lead_act = lead_error(&zas, &angles, 1.25, 1.0);
+    assert!(
+        lead < 0.005 && lead_act < 0.005,
+        "lead {lead} {lead_act} mm"
+    );
+    let standing: Vec<usize> = rows.iter().copied().filter(|&i| i >= rest).collect();
+    assert!(standing.len() >= REST_ROWS, "stood {} rows", standing.len());
+    assert!(standing.iter().all(|&i| (z[i] - 2.0).abs() < 1e-9));
+    // After the resume the program goes on: G0 Z20.
+    assert!(
+        z.iter()
+            .skip(standing[standing.len() - 1])
+            .any(|&v| (v - 20.0).abs() < 1e-9)
+    );
+}
+
+#[test]
+fn a_hold_in_a_rigid_tap_finishes_the_tap_and_holds_out_of_the_hole() {
+    hold_in_a_rigid_tap(&MachineConfig::builtin_lathe());
+}
+
+#[test]
+fn a_hold_in_a_rigid_tap_on_canopen_drives_finishes_the_tap() {
+    hold_in_a_rigid_tap(&lathe_canopen());
+}
