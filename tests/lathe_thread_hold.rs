@@ -248,3 +248,56 @@ fn a_hold_in_a_rigid_tap_finishes_the_tap_and_holds_out_of_the_hole() {
 fn a_hold_in_a_rigid_tap_on_canopen_drives_finishes_the_tap() {
     hold_in_a_rigid_tap(&lathe_canopen());
 }
+
+#[test]
+fn feed_override_does_not_act_inside_a_thread_pass() {
+    // Feed override 30 % from half-way through the second pass: the pass stays locked to
+    // the spindle (a slide at 30 % would leave the pitch by millimetres), every pass in the
+    // same groove; the override holds for the moves after it.
+    let machine = MachineConfig::builtin_lathe();
+    let file = program("lathe/thread_g33.nc");
+    let mut buf = Vec::new();
+    let mut set_at = None;
+    {
+        let mut run = Run::start(
+            &file,
+            &machine,
+            RunOptions {
+                realtime: false,
+                trace: Some(&mut buf),
+            },
+        )
+        .unwrap_or_else(|f| panic!("{}", f.error));
+        loop {
+            let status = run.status();
+            if set_at.is_none()
+                && (status.commanded[0] - 9.6).abs() < 1e-9
+                && status.commanded[1] < -12.0
+            {
+                assert_eq!(run.set_feed_override(0.3), 0.3);
+                set_at = Some(status.t);
+            }
+            match run.step() {
+                Ok(true) => {}
+                Ok(false) => break,
+                Err(e) => panic!("run failed: {e}"),
+            }
+        }
+        assert_eq!(run.status().feed_override, 0.3);
+        run.finish(None).unwrap_or_else(|f| panic!("{}", f.error));
+    }
+    let set_at = set_at.expect("the pass was reached");
+    let trace = Trace::parse(&String::from_utf8(buf).expect("UTF-8")).expect("trace parses");
+    let found = passes(&trace, -27.0, 2.0, 10.5, 50);
+    assert_eq!(found.len(), 4);
+    let second = &found[1];
+    assert!(
+        trace.t[second.rows[0]] < set_at && trace.t[second.rows[second.rows.len() - 1]] > set_at
+    );
+    for (k, p) in found.iter().enumerate() {
+        let lead = lead_error(&p.z, &p.angle, 1.5, 1.0);
+        assert!(lead < 0.005, "pass {k}: lead error {lead} mm");
+        let a = start_angle(p, 2.0, 1.5, 1.0);
+        assert!(angle_apart(a, 30.0) < 1.0, "pass {k} starts at {a}°");
+    }
+}
