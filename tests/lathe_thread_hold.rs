@@ -301,3 +301,69 @@ fn feed_override_does_not_act_inside_a_thread_pass() {
         assert!(angle_apart(a, 30.0) < 1.0, "pass {k} starts at {a}°");
     }
 }
+
+#[test]
+fn a_hold_in_a_g31_pass_rests_after_the_cycles_retract() {
+    let machine = MachineConfig::builtin_lathe();
+    let file = program("lathe/thread_g31.nc");
+    let (result, plain) = common::run(&file, &machine);
+    result.expect("runs without a hold");
+    let plain_passes = passes(&plain, -20.0, 1.0, 10.5, 50);
+    assert!(plain_passes.len() >= 3, "{} passes", plain_passes.len());
+    // Half-way through the second pass: below Z-10 at its depth.
+    let second_x = plain_passes[1].x[0];
+    let held = run_with_hold(&file, &machine, |s| {
+        (s.commanded[0] - second_x).abs() < 1e-9 && s.commanded[1] < -10.0
+    });
+    let trace = &held.trace;
+    let (t, x, z) = (&trace.t, col_of(trace, "X"), col_of(trace, "Z"));
+    let rows: Vec<usize> = (0..t.len())
+        .filter(|&i| t[i] > held.asked && t[i] <= held.resumed)
+        .collect();
+    // The pass runs on at its depth to its end; from there only X moves (the retract out
+    // of the thread, whose outer radius is 10, up to the blend into the way back) and the
+    // axes rest outside it until the resume.
+    let pass_end = rows
+        .iter()
+        .copied()
+        .find(|&i| (x[i] - second_x).abs() > 1e-9)
+        .expect("the pass ends")
+        - 1;
+    let rest_x = x[rows[rows.len() - 1]];
+    assert!(rest_x > 10.0, "rests at X {rest_x}, in the thread");
+    for &i in rows.iter().filter(|&&i| i >= pass_end) {
+        // Within the corner blend of the retract into the way back.
+        assert!(
+            (z[i] - z[pass_end]).abs() <= machine.tolerance,
+            "row {i}: Z moved to {}",
+            z[i]
+        );
+    }
+    let standing = rows
+        .iter()
+        .filter(|&&i| (x[i] - rest_x).abs() < 1e-12)
+        .count();
+    assert!(standing >= REST_ROWS, "stood {standing} rows");
+    // The cycle then ran to its end: the same passes in the same grooves as without a hold.
+    let found = passes(trace, -20.0, 1.0, 10.5, 50);
+    assert_eq!(found.len(), plain_passes.len());
+    for (k, (p, q)) in found.iter().zip(&plain_passes).enumerate() {
+        assert!((p.x[0] - q.x[0]).abs() < 1e-9, "pass {k} depth");
+        let lead = lead_error(&p.z, &p.angle, 1.5, 1.0);
+        assert!(
+            lead < 0.005,
+            "pass {k}: lead error {lead} mm over Z {} .. {}, without the hold {}",
+            p.z[0],
+            p.z[p.z.len() - 1],
+            lead_error(&q.z, &q.angle, 1.5, 1.0)
+        );
+        let (a, b) = (p.angle[0].rem_euclid(360.0), q.angle[0].rem_euclid(360.0));
+        let shift = (p.z[0] - q.z[0]) * 360.0 / 1.5;
+        assert!(
+            angle_apart(a + shift, b) < 1.0,
+            "pass {k}: phase {a}° vs {b}° (Z {} vs {})",
+            p.z[0],
+            q.z[0]
+        );
+    }
+}

@@ -4,8 +4,9 @@
 //! during it must not leave the tool standing in the groove. The control finishes the pass,
 //! runs the move after it (the retract) and only then holds. [`Planner::hold_after_move`]
 //! asks for that: once the path stands at the start of the next move and that move's pieces
-//! are committed, a standstill is placed at the end of its last piece (every piece with its
-//! source block, up to the first other one), and the planner holds when it gets there.
+//! are committed, a standstill is placed at the end of the programmed element it stands on
+//! (before the blend into the next one, within the path tolerance of its end point), and the
+//! planner holds when it gets there.
 
 use super::{Marker, Planner, ROUNDING};
 
@@ -36,14 +37,22 @@ impl Planner {
         let Some(first) = self.pieces.get(k) else {
             return;
         };
-        let loc = first.loc;
-        let mut end = first.end();
+        // The pieces of one programmed element follow on along its shape (a piece cut off
+        // for the jerk of its neighbour goes on where the one before ends); a blend or the
+        // next element starts a shape of its own. A cycle's moves all come from one block,
+        // so the block alone would not tell them apart.
+        let mut prev = first;
         for p in self.pieces.iter().skip(k + 1) {
-            if p.loc != loc || (p.start - end).abs() > ROUNDING {
+            let same_shape = p.loc == prev.loc
+                && (p.start - prev.end()).abs() <= ROUNDING
+                && (p.offset - (prev.offset + prev.length)).abs() <= ROUNDING
+                && p.shape.length() == prev.shape.length();
+            if !same_shape {
                 break;
             }
-            end = p.end();
+            prev = p;
         }
+        let end = prev.end();
         // Not past the committed path: a move whose later pieces are still waiting to be
         // committed ends at most there.
         let end = end.min(self.committed_end);
