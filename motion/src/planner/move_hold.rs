@@ -122,13 +122,23 @@ mod tests {
 
     #[test]
     fn a_hold_after_the_move_rests_at_its_end_and_resumes() {
+        rests_at_the_end_of_the_first_move([1, 2, 3]);
+    }
+
+    #[test]
+    fn moves_of_one_block_are_told_apart() {
+        // A cycle's moves all come from its block.
+        rests_at_the_end_of_the_first_move([4, 4, 4]);
+    }
+
+    fn rests_at_the_end_of_the_first_move(lines: [u32; 3]) {
         let mut p = planner();
         // Up Y 20 mm, then along X 30 mm, then up Z 5 mm: two corners (blended within
         // the 0.01 mm tolerance).
         let mut ops = vec![
-            line([0.0; 3], [0.0, 20.0, 0.0], 1),
-            line([0.0, 20.0, 0.0], [30.0, 20.0, 0.0], 2),
-            line([30.0, 20.0, 0.0], [30.0, 20.0, 5.0], 3),
+            line([0.0; 3], [0.0, 20.0, 0.0], lines[0]),
+            line([0.0, 20.0, 0.0], [30.0, 20.0, 0.0], lines[1]),
+            line([30.0, 20.0, 0.0], [30.0, 20.0, 5.0], lines[2]),
         ]
         .into_iter();
         p.hold_after_move();
