@@ -32,6 +32,7 @@ mod events;
 pub mod guard;
 mod log;
 mod operator;
+mod pass_hold;
 mod per_rev;
 mod reader;
 mod settle;
@@ -227,6 +228,8 @@ pub struct Run<'a, 'w> {
     sync: Option<sync::SyncPass>,
     /// A rigid tap geared to the spindle (idle between taps).
     tap: tap::TapPass,
+    /// A feed hold asked for during a geared pass, for its end.
+    pass_hold: Option<pass_hold::PassHold>,
     /// Feed per revolution following the measured spindle speed.
     warp: per_rev::RevWarp,
 }
@@ -438,7 +441,8 @@ pub struct RunStatus {
     pub actual: Vec<f64>,
     /// Following error per machine axis.
     pub following_error: Vec<f64>,
-    /// True while a feed hold is active.
+    /// True while a feed hold is active or asked for (from the request on, also while it
+    /// waits for the end of a geared pass and its retract).
     pub held: bool,
     /// Feed override factor (1.0 = 100 %).
     pub feed_override: f64,
@@ -637,6 +641,7 @@ impl<'a, 'w> Run<'a, 'w> {
             operator_seen: StopLevel::None,
             sync: None,
             tap: tap::TapPass::idle(64),
+            pass_hold: None,
             warp: per_rev::RevWarp::new(),
             log,
             deferred: None,
@@ -661,7 +666,10 @@ impl<'a, 'w> Run<'a, 'w> {
                 self.sync_step()
             };
             return match geared {
-                Ok(()) => Ok(true),
+                Ok(()) => {
+                    self.apply_pass_hold();
+                    Ok(true)
+                }
                 Err(
                     e @ (RunError::Fault { .. } | RunError::Backend(_) | RunError::Setpoint { .. }),
                 ) => Err(self.quick_stop(e)),
@@ -715,13 +723,20 @@ impl<'a, 'w> Run<'a, 'w> {
         }
     }
 
-    /// Feed hold: slows down along the path to a stop and waits.
+    /// Feed hold: slows down along the path to a stop and waits. Inside a pass geared to
+    /// the spindle it waits for the pass to end (see `pass_hold`): after a thread pass
+    /// and its retract, after a rigid tap.
     pub fn hold(&mut self) {
-        self.planner.hold();
+        if self.in_geared_pass() {
+            self.defer_hold();
+        } else {
+            self.planner.hold();
+        }
     }
 
-    /// Ends a feed hold.
+    /// Ends a feed hold (or cancels one not yet in force).
     pub fn resume(&mut self) {
+        self.pass_hold = None;
         self.planner.resume();
     }
 
@@ -773,7 +788,7 @@ impl<'a, 'w> Run<'a, 'w> {
                 .iter()
                 .map(|f| f.following_error)
                 .collect(),
-            held: self.planner.is_held(),
+            held: self.planner.is_held() || self.hold_deferred(),
             feed_override: self.planner.feed_override(),
             path_speed: self.planner.path_speed(),
             spindle_rpm,

@@ -557,11 +557,9 @@ impl<'a> MachineChecks<'a> {
                 "the spindle is a Modbus VFD, which measures no spindle angle: it cannot \
                  {what} (that needs a spindle with an encoder)"
             )),
-            Some(SpindleBackendConfig::Canopen(_)) => Some(format!(
-                "the CANopen spindle drive's position (0x6064) is not read yet: it cannot \
-                 {what} (that needs a spindle whose angle klar measures)"
-            )),
-            Some(SpindleBackendConfig::Sim(_)) => None,
+            // A CiA 402 spindle reports its actual position (0x6064), scaled by its
+            // counts_per_rev, as the measured angle.
+            Some(SpindleBackendConfig::Canopen(_) | SpindleBackendConfig::Sim(_)) => None,
         }
     }
 

@@ -309,19 +309,6 @@ fn a_stop_requested_inside_a_pass_takes_effect_at_its_end() {
 }
 
 #[test]
-fn check_refuses_threading_on_a_canopen_spindle_until_its_position_is_read() {
-    let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/canopen-sim.toml");
-    let machine = MachineConfig::load(&file).expect("machine loads");
-    let report = test_run(&program("lathe/thread_g33.nc"), &machine);
-    let first = report.errors.first().expect("refused");
-    assert_eq!(first.block, Some(21), "{first}");
-    assert!(
-        first.message.contains("position (0x6064) is not read"),
-        "{first}"
-    );
-}
-
-#[test]
 fn bad_g33_words_are_diagnostics_at_their_word() {
     let machine = MachineConfig::builtin_lathe();
     for (block, want_col, want) in [

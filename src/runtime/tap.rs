@@ -46,12 +46,12 @@ pub(crate) fn end_window(pitch: f64) -> f64 {
 }
 
 /// The ramp rate of the machine's spindle, rpm/s, as its machine file gives it (a
-/// simulated spindle's `acceleration`); `None` when the file does not say.
+/// simulated or CiA 402 spindle's `acceleration`); `None` when the file does not say.
 pub(crate) fn spindle_ramp(config: &MachineConfig) -> Option<f64> {
     match &config.spindle.as_ref()?.backend {
         SpindleBackendConfig::Sim(s) => Some(s.acceleration),
         SpindleBackendConfig::Modbus(m) => m.simulate.as_ref().map(|s| s.acceleration),
-        SpindleBackendConfig::Canopen(_) => None,
+        SpindleBackendConfig::Canopen(c) => Some(c.drive.acceleration),
     }
 }
 

@@ -5,6 +5,7 @@
 
 pub mod mill5;
 pub mod peers;
+pub mod threads;
 pub mod vfd_peer;
 
 use klar::config::MachineConfig;

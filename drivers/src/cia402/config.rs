@@ -249,9 +249,16 @@ impl DriveConfig {
 }
 
 impl SpindleConfig {
-    /// Checks what can be checked without the bus: in profile velocity mode the drive
-    /// needs a positive, finite acceleration for its own ramp.
+    /// Checks what can be checked without the bus: the position PDO differs from the velocity PDO, and in profile
+    /// velocity mode the drive needs a positive, finite acceleration for its own ramp.
     pub fn check(&self) -> Result<(), String> {
+        if self.position_pdo() == self.tpdo {
+            return Err(format!(
+                "spindle node {}: position_tpdo {} is the transmit PDO of the velocity \
+                 (tpdo); the position needs a PDO of its own",
+                self.node, self.tpdo
+            ));
+        }
         let a = self.acceleration;
         if self.mode == SpindleMode::Pv && !(a.is_finite() && a > 0.0) {
             return Err(format!(
@@ -262,6 +269,12 @@ impl SpindleConfig {
         }
         Ok(())
     }
+
+    /// The transmit PDO number carrying the actual position: `position_tpdo`, or the one
+    /// after `tpdo` (4 wraps to 1).
+    pub fn position_pdo(&self) -> u16 {
+        self.position_tpdo.unwrap_or(self.tpdo % 4 + 1)
+    }
 }
 
 /// A CiA 402 drive used as the spindle, in cyclic synchronous velocity mode (default) or
@@ -271,7 +284,8 @@ impl SpindleConfig {
 pub struct SpindleConfig {
     /// CANopen node ID, 1..=127.
     pub node: u8,
-    /// Encoder counts per spindle revolution (at the spindle, gearing included).
+    /// Encoder counts per spindle revolution (at the spindle, gearing included): the
+    /// scaling of the velocity (counts/s per rpm) and of the measured angle (0x6064).
     pub counts_per_rev: f64,
     /// True when positive counts turn the spindle counter-clockwise (M4).
     #[serde(default)]
@@ -296,6 +310,10 @@ pub struct SpindleConfig {
     /// Transmit PDO number used for statusword and actual velocity (1..=4).
     #[serde(default = "default_pdo_number")]
     pub tpdo: u16,
+    /// Transmit PDO number used for the actual position (0x6064), the measured spindle
+    /// angle (1..=4, not `tpdo`; default: the one after `tpdo`, 4 wrapping to 1).
+    #[serde(default)]
+    pub position_tpdo: Option<u16>,
 }
 
 /// Homing parameters of one drive.

@@ -17,6 +17,6 @@ pub use backend::Cia402Backend;
 pub use config::{
     AxisMode, BusConfig, CanOpenConfig, DriveConfig, HomingConfig, SpindleConfig, SpindleMode,
 };
-pub use network::{Cia402Error, cyclic_traffic};
+pub use network::{Cia402Error, cyclic_traffic, spindle_position_traffic};
 pub use spindle::Cia402Spindle;
 pub use state::PowerState;

@@ -52,6 +52,10 @@ pub const SPINDLE_TPDO_ENTRIES: [PdoEntry; 2] = [
     PdoEntry::new(VELOCITY_ACTUAL, 0, 32),
 ];
 
+/// The second transmit PDO klar maps for a spindle: the actual position (the measured
+/// angle; statusword, velocity and position together would not fit one 8-byte frame).
+pub const SPINDLE_POSITION_TPDO_ENTRIES: [PdoEntry; 1] = [PdoEntry::new(POSITION_ACTUAL, 0, 32)];
+
 /// Errors of the CiA 402 backend's set-up.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum Cia402Error {
@@ -79,6 +83,7 @@ pub enum Cia402Error {
 
 /// The cyclic traffic of `drives` drives (axes and spindle) with klar's PDO layout: SYNC
 /// plus one receive and one transmit PDO each (CSV and spindle PDOs have the same length).
+/// A spindle adds its position PDO ([`spindle_position_traffic`]).
 pub fn cyclic_traffic(drives: usize) -> CyclicTraffic {
     let rx: usize = RPDO_ENTRIES.iter().map(|e| e.bytes()).sum();
     let tx: usize = TPDO_ENTRIES.iter().map(|e| e.bytes()).sum();
@@ -88,6 +93,15 @@ pub fn cyclic_traffic(drives: usize) -> CyclicTraffic {
         frame_lengths.push(tx);
     }
     CyclicTraffic { frame_lengths }
+}
+
+/// Adds a spindle's second transmit PDO (its actual position) to `traffic`.
+pub fn spindle_position_traffic(traffic: &mut CyclicTraffic) {
+    let bytes = SPINDLE_POSITION_TPDO_ENTRIES
+        .iter()
+        .map(|e| e.bytes())
+        .sum();
+    traffic.frame_lengths.push(bytes);
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -173,6 +187,15 @@ pub(crate) struct Drive {
     /// Axis: the position command the last actual position answers (the one sent with its
     /// SYNC), units: the reference of the reported following error.
     pub(crate) answered: f64,
+    /// Spindle: the COB-ID of the transmit PDO with the actual position.
+    pub(crate) position_cob: Option<u16>,
+    /// Spindle: the last actual position the drive sent (counts, as it wraps at 32 bits).
+    pub(crate) position_raw: Option<i32>,
+    /// Spindle: the actual position unwrapped (counts; the first value the drive sent,
+    /// then every change added).
+    pub(crate) position_total: i64,
+    /// Spindle: counts per degree with direction, for the measured angle.
+    pub(crate) angle_scaling: Option<Scaling>,
 }
 
 /// Largest change of the actual position between two SYNCs (counts) that still counts as
@@ -394,7 +417,11 @@ impl Network {
 
     /// Collects the transmit PDOs answering the last SYNC, waiting up to `wait` for them.
     pub(crate) fn collect(&mut self, wait: Duration) {
-        let cobs: Vec<u16> = self.drives.iter().map(|d| d.tpdo_cob).collect();
+        let cobs: Vec<u16> = self
+            .drives
+            .iter()
+            .flat_map(|d| std::iter::once(d.tpdo_cob).chain(d.position_cob))
+            .collect();
         let answered = self.master.await_pdos(&cobs, wait);
         self.round_trip = self
             .last_sync
@@ -413,15 +440,43 @@ impl Network {
             let Some(d) = self.drives.get(i) else {
                 continue;
             };
-            let fresh = self
-                .master
-                .pdo(d.tpdo_cob)
-                .filter(|s| s.sync_count >= sync)
-                .map(|s| s.frame);
-            let node = d.node;
+            let fresh_pdo = |cob: u16| {
+                self.master
+                    .pdo(cob)
+                    .filter(|s| s.sync_count >= sync)
+                    .map(|s| s.frame)
+            };
+            let fresh_position = d.position_cob.map(fresh_pdo);
+            // A spindle's cycle counts as answered only with both of its PDOs.
+            let fresh = fresh_pdo(d.tpdo_cob).filter(|_| !matches!(fresh_position, Some(None)));
+            let (node, missed_before, kind) = (d.node, d.missed, d.kind);
+            if let Some(Some(frame)) = fresh_position {
+                match pdo::unpack(&SPINDLE_POSITION_TPDO_ENTRIES, frame.data()) {
+                    Some(v) => {
+                        if let (Some(d), [raw]) = (self.drives.get_mut(i), v.as_slice()) {
+                            let raw = *raw as i32;
+                            // The drive's counter wraps at 32 bits: the change since the
+                            // last PDO is the wrapping difference.
+                            d.position_total = match d.position_raw {
+                                Some(last) => d.position_total + i64::from(raw.wrapping_sub(last)),
+                                None => i64::from(raw),
+                            };
+                            d.position_raw = Some(raw);
+                        }
+                    }
+                    None => {
+                        let cause = format!(
+                            "node {node}: position transmit PDO with {} bytes, mapping needs 4",
+                            frame.data().len()
+                        );
+                        self.stop_all(Some(i), AxisFault::CommunicationLost, cause);
+                        continue;
+                    }
+                }
+            }
             match fresh {
                 None => {
-                    let missed = d.missed + 1;
+                    let missed = missed_before + 1;
                     if let Some(d) = self.drives.get_mut(i) {
                         d.missed = missed;
                     }
@@ -432,7 +487,7 @@ impl Network {
                         self.stop_all(Some(i), AxisFault::CommunicationLost, cause);
                     }
                 }
-                Some(frame) => match pdo::unpack(&transmit_entries(d.kind), frame.data()) {
+                Some(frame) => match pdo::unpack(&transmit_entries(kind), frame.data()) {
                     Some(v) => {
                         if let (Some(d), [status, actual]) = (self.drives.get_mut(i), v.as_slice())
                         {

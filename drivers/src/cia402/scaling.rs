@@ -46,6 +46,12 @@ impl Scaling {
         f64::from(counts) / self.counts_per_unit
     }
 
+    /// A count total wider than the drive's 32 bits (an unwrapped position) in machine
+    /// units.
+    pub fn wide_to_units(&self, counts: i64) -> f64 {
+        counts as f64 / self.counts_per_unit
+    }
+
     /// A speed or acceleration (always positive) in counts per second (or per s²),
     /// saturated to the u32 range.
     pub fn magnitude_counts(&self, units: f64) -> u32 {

@@ -72,11 +72,12 @@ impl Network {
         if let Some(s) = &config.spindle {
             s.check().map_err(Cia402Error::Config)?;
         }
-        let load = busload::check(
-            &cyclic_traffic(config.drives.len() + usize::from(config.spindle.is_some())),
-            config.bus.bitrate(),
-            servo_period,
-        )?;
+        let mut traffic =
+            cyclic_traffic(config.drives.len() + usize::from(config.spindle.is_some()));
+        if config.spindle.is_some() {
+            spindle_position_traffic(&mut traffic);
+        }
+        let load = busload::check(&traffic, config.bus.bitrate(), servo_period)?;
         tracing::info!(
             load_percent = load * 100.0,
             "CAN bus load of cyclic traffic"
@@ -242,7 +243,7 @@ fn new_spindle(cfg: &SpindleConfig) -> Result<Drive, Cia402Error> {
         SpindleMode::Csv => MODE_CSV,
         SpindleMode::Pv => MODE_PROFILE_VELOCITY,
     };
-    make_drive(
+    let mut drive = make_drive(
         DriveKind::Spindle,
         mode,
         cfg.node,
@@ -250,7 +251,21 @@ fn new_spindle(cfg: &SpindleConfig) -> Result<Drive, Cia402Error> {
         cfg.rpdo,
         cfg.tpdo,
         false,
-    )
+    )?;
+    let number = cfg.position_pdo();
+    drive.position_cob = Some(
+        pdo::default_cob_id(PdoKind::Transmit, number, cfg.node).ok_or_else(|| {
+            Cia402Error::Config(format!(
+                "spindle node {}: position transmit PDO {number} not in 1..=4",
+                cfg.node
+            ))
+        })?,
+    );
+    drive.angle_scaling = Some(
+        Scaling::new(cfg.counts_per_rev / 360.0, cfg.invert)
+            .map_err(|e| Cia402Error::Config(format!("spindle node {}: {e}", cfg.node)))?,
+    );
+    Ok(drive)
 }
 
 fn make_drive(
@@ -302,6 +317,10 @@ fn make_drive(
         still_for: 0,
         speed: 0.0,
         answered: 0.0,
+        position_cob: None,
+        position_raw: None,
+        position_total: 0,
+        angle_scaling: None,
     })
 }
 
@@ -349,9 +368,9 @@ fn configure_drive(
     let mode = d.mode;
     let rx_entries = receive_entries(d.kind, mode);
     let tx_entries = transmit_entries(d.kind);
-    let (rpdo, tpdo) = match (d.kind, cfg, &bus.spindle) {
-        (DriveKind::Axis, Some(c), _) => (c.rpdo, c.tpdo),
-        (DriveKind::Spindle, _, Some(s)) => (s.rpdo, s.tpdo),
+    let (rpdo, tpdo, position_tpdo) = match (d.kind, cfg, &bus.spindle) {
+        (DriveKind::Axis, Some(c), _) => (c.rpdo, c.tpdo, None),
+        (DriveKind::Spindle, _, Some(s)) => (s.rpdo, s.tpdo, Some(s.position_pdo())),
         _ => {
             return Err(Cia402Error::Config(format!(
                 "node {node}: no configuration"
@@ -456,7 +475,7 @@ fn configure_drive(
                 PdoKind::Receive => rpdo,
                 PdoKind::Transmit => tpdo,
             };
-            if n == used {
+            if n == used || (kind == PdoKind::Transmit && Some(n) == position_tpdo) {
                 continue;
             }
             match master.disable_pdo(node, kind, n) {
@@ -486,5 +505,17 @@ fn configure_drive(
             entries: tx_entries.to_vec(),
         },
     )?;
+    if let (Some(number), Some(cob_id)) = (position_tpdo, d.position_cob) {
+        master.configure_pdo(
+            node,
+            &PdoConfig {
+                kind: PdoKind::Transmit,
+                number,
+                cob_id,
+                transmission: TRANSMIT_EVERY_SYNC,
+                entries: SPINDLE_POSITION_TPDO_ENTRIES.to_vec(),
+            },
+        )?;
+    }
     Ok(())
 }

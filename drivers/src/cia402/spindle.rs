@@ -10,6 +10,10 @@
 //! speed" is the drive's "target reached" (statusword bit 10), taken only once the drive
 //! has had the current target for a full cycle (so a bit earned by the previous target does
 //! not count).
+//!
+//! In both modes the drive's actual position (0x6064, on a transmit PDO of its own) is the
+//! measured spindle angle: counts through `counts_per_rev` to degrees, unwrapped across the
+//! drive's 32-bit counter, so thread cutting and rigid tapping can follow it.
 
 use std::sync::{Arc, Mutex};
 
@@ -85,10 +89,15 @@ impl SpindleBackend for Cia402Spindle {
             let window = (d.commanded.abs() * at_speed_fraction).max(at_speed_min);
             (d.commanded == 0.0 || enabled) && (rpm - d.commanded).abs() <= window
         };
+        // The measured angle: the unwrapped actual position (0x6064) in degrees, once the
+        // drive has sent it.
+        let position = d
+            .position_raw
+            .and(d.angle_scaling)
+            .map(|s| s.wide_to_units(d.position_total));
         Ok(SpindleFeedback {
             rpm,
-            // This device reports no position (0x6064 is not mapped).
-            position: None,
+            position,
             at_speed: d.fault.is_none() && at_speed,
             fault: d.fault.clone(),
         })

@@ -31,6 +31,7 @@ use commit::{path_feed, piece_error};
 mod cruise;
 mod deep;
 mod drops;
+mod move_hold;
 pub mod path;
 mod run;
 mod scan;
@@ -177,6 +178,8 @@ pub struct Planner {
     cruise: cruise::Cruising,
     /// The last window's limits before and after the backward pass.
     settled: scan::SettleMemo,
+    /// A feed hold at the end of the next move (see `move_hold`).
+    move_hold: move_hold::MoveHold,
 }
 
 impl Planner {
@@ -239,6 +242,7 @@ impl Planner {
             table: None,
             cruise: cruise::Cruising::default(),
             settled: scan::SettleMemo::default(),
+            move_hold: move_hold::MoveHold::default(),
         })
     }
 
@@ -329,9 +333,11 @@ impl Planner {
         self.held = true;
     }
 
-    /// Ends a feed hold: speeds up again along the path.
+    /// Ends a feed hold (and cancels one asked for after the next move): speeds up again
+    /// along the path.
     pub fn resume(&mut self) {
         self.held = false;
+        self.move_hold = move_hold::MoveHold::default();
     }
 
     /// True while a feed hold is requested.
@@ -598,6 +604,7 @@ impl Planner {
     }
 
     fn step(&mut self, starved: bool) -> Option<Step> {
+        self.place_move_hold();
         loop {
             match self.markers.front() {
                 Some(Marker::Event { at, .. }) if *at <= self.reached + STOP_SNAP => {
@@ -623,6 +630,7 @@ impl Planner {
                         a: 0.0,
                     };
                     self.reached = at;
+                    self.reached_stop(at);
                     if let Some(Marker::Stop { op, dwell, .. }) = self.markers.pop_front() {
                         if dwell > 0.0 {
                             let loc = op.as_ref().map_or(self.rest_loc, |o| o.loc);

@@ -96,7 +96,7 @@ impl Shape {
         }
     }
 
-    fn length(&self) -> f64 {
+    pub(super) fn length(&self) -> f64 {
         match self {
             Shape::Element(g) => g.length(),
             Shape::Blend(q) => q.length(),

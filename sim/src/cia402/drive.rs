@@ -677,7 +677,10 @@ impl SimCia402Drive {
                 .clamp(f64::from(i32::MIN), f64::from(i32::MAX)) as i32
         };
         self.od.set(STATUSWORD, 0, u32::from(sw));
-        self.od.set(POSITION_ACTUAL, 0, to_counts(reported) as u32);
+        // The position counter wraps at 32 bits like a real drive's (a spindle turning
+        // one way for long passes i32::MAX); the other values saturate.
+        let wrapped = ((reported * cpu).round() as i64) as i32;
+        self.od.set(POSITION_ACTUAL, 0, wrapped as u32);
         self.od.set(
             VELOCITY_ACTUAL,
             0,
