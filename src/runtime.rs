@@ -90,6 +90,11 @@ pub struct RunReport {
     /// Servo cycles in which the planner wanted ops the program reader had not yet
     /// delivered (realtime runs): the path then brakes for the end of what it has.
     pub starved: u64,
+    /// Corner blends the planner made.
+    pub blends: u64,
+    /// Corners the planner stopped at exactly because every one of its preallocated blend
+    /// slots was held by the path ahead (`klar_motion::blend::BLEND_SLOTS`).
+    pub blends_refused: u64,
     /// Seconds spent waiting for the spindle to reach speed (on the wall clock in realtime
     /// runs).
     pub spindle_wait: f64,
@@ -825,6 +830,14 @@ impl<'a, 'w> Run<'a, 'w> {
             tracing::warn!(
                 "{} log records from the servo loop were dropped (queue full)",
                 self.report.log_dropped
+            );
+        }
+        self.report.blends = self.planner.blends_made();
+        self.report.blends_refused = self.planner.blends_refused();
+        if self.report.blends_refused > 0 {
+            tracing::warn!(
+                "{} corners stopped exactly: every blend slot was held by the path ahead",
+                self.report.blends_refused
             );
         }
         if self.report.starved > 0 {
