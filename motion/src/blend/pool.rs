@@ -12,8 +12,8 @@ use super::Quintic;
 use std::sync::Arc;
 
 /// Blend curves a planner keeps slots for: blends of the committed path still ahead of
-/// the machine. The look-ahead of a dense program (0.01 mm chords, every corner blended)
-/// holds a few hundred at the most; each slot takes about 1 KiB.
+/// the machine. The look-ahead of the densest bench program (a CAM pocket of 0.01–0.1 mm
+/// chords) holds about 700 at once; each slot takes about 1 KiB.
 pub const BLEND_SLOTS: usize = 4096;
 
 /// Preallocated slots for blend curves.
@@ -24,8 +24,6 @@ pub struct BlendPool {
     next: usize,
     /// Corners that found every slot taken.
     refused: u64,
-    /// Most slots held at once.
-    high_water: usize,
     /// Blends stored so far.
     stored: u64,
 }
@@ -39,7 +37,6 @@ impl BlendPool {
                 .collect(),
             next: 0,
             refused: 0,
-            high_water: 0,
             stored: 0,
         }
     }
@@ -77,17 +74,15 @@ impl BlendPool {
     pub fn store(&mut self, curve: Quintic) -> Option<Arc<Quintic>> {
         let i = self.free_slot()?;
         let n = self.slots.len();
-        let held = self.held() + 1;
         let slot = self.slots.get_mut(i)?;
         *Arc::get_mut(slot)? = curve;
         let out = Arc::clone(slot);
         self.next = (i + 1) % n;
-        self.high_water = self.high_water.max(held);
         self.stored += 1;
         Some(out)
     }
 
-    /// Slots held by pieces now.
+    /// Slots held by pieces now (looks at every slot: for diagnostics, not the loop).
     pub fn held(&self) -> usize {
         self.slots
             .iter()
@@ -104,11 +99,6 @@ impl BlendPool {
     pub fn refused(&self) -> u64 {
         self.refused
     }
-
-    /// Most slots held at once so far.
-    pub fn high_water(&self) -> usize {
-        self.high_water
-    }
 }
 
 /// A copy has slots of its own (made now), so that neither pool writes into a curve the
@@ -117,7 +107,6 @@ impl Clone for BlendPool {
     fn clone(&self) -> BlendPool {
         BlendPool {
             refused: self.refused,
-            high_water: self.high_water,
             stored: self.stored,
             ..BlendPool::new(self.capacity())
         }

@@ -205,11 +205,6 @@ impl Planner {
         self.blends.stored()
     }
 
-    /// Most blend slots the committed path has held at once so far.
-    pub fn blends_high_water(&self) -> usize {
-        self.blends.high_water()
-    }
-
     /// A planner for a machine standing at `start`.
     pub fn new(config: PlannerConfig, start: Pose) -> Result<Self, MotionError> {
         config.validate()?;
