@@ -549,6 +549,12 @@ fn cmd_run(
             let unit = if l.is_rotary() { "deg" } else { "mm" };
             say!("max following error {l}: {fe:.4} {unit}");
         }
+        if report.blends_refused > 0 {
+            say!(
+                "blend slots full: {} corners stopped exactly",
+                report.blends_refused
+            );
+        }
         if report.spindle_wait > 0.0 {
             say!("spindle wait: {:.3} s", report.spindle_wait);
         }

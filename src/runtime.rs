@@ -91,6 +91,11 @@ pub struct RunReport {
     /// Servo cycles in which the planner wanted ops the program reader had not yet
     /// delivered (realtime runs): the path then brakes for the end of what it has.
     pub starved: u64,
+    /// Corner blends the planner made.
+    pub blends: u64,
+    /// Corners the planner stopped at exactly because every one of its preallocated blend
+    /// slots was held by the path ahead (`klar_motion::blend::BLEND_SLOTS`).
+    pub blends_refused: u64,
     /// Seconds spent waiting for the spindle to reach speed (on the wall clock in realtime
     /// runs).
     pub spindle_wait: f64,
@@ -429,7 +434,7 @@ pub fn run_program(
 }
 
 /// A snapshot of a run for displays.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct RunStatus {
     /// Machine time, s.
     pub t: f64,
@@ -776,24 +781,28 @@ impl<'a, 'w> Run<'a, 'w> {
 
     /// A snapshot for displays.
     pub fn status(&mut self) -> RunStatus {
-        let spindle_rpm = self.io.spindle_mut().map(|s| s.feedback().rpm);
-        RunStatus {
-            t: self.t,
-            line: self.line,
-            commanded: self.commanded.clone(),
-            actual: self.actual.clone(),
-            following_error: self
-                .io
-                .feedback()
-                .iter()
-                .map(|f| f.following_error)
-                .collect(),
-            held: self.planner.is_held() || self.hold_deferred(),
-            feed_override: self.planner.feed_override(),
-            path_speed: self.planner.path_speed(),
-            spindle_rpm,
-            blocks: self.blocks,
-        }
+        let mut status = RunStatus::default();
+        self.status_into(&mut status);
+        status
+    }
+
+    /// Fills `status` as [`Run::status`] would, reusing its buffers: once they hold the
+    /// machine's axes this allocates nothing, so a loop that steps the run can read it every
+    /// cycle.
+    pub fn status_into(&mut self, status: &mut RunStatus) {
+        status.spindle_rpm = self.io.spindle_mut().map(|s| s.feedback().rpm);
+        status.t = self.t;
+        status.line = self.line;
+        status.commanded.clone_from(&self.commanded);
+        status.actual.clone_from(&self.actual);
+        status.following_error.clear();
+        status
+            .following_error
+            .extend(self.io.feedback().iter().map(|f| f.following_error));
+        status.held = self.planner.is_held() || self.hold_deferred();
+        status.feed_override = self.planner.feed_override();
+        status.path_speed = self.planner.path_speed();
+        status.blocks = self.blocks;
     }
 
     /// Program line of the motion being executed (1-based; 0 before the first), read
@@ -840,6 +849,14 @@ impl<'a, 'w> Run<'a, 'w> {
             tracing::warn!(
                 "{} log records from the servo loop were dropped (queue full)",
                 self.report.log_dropped
+            );
+        }
+        self.report.blends = self.planner.blends_made();
+        self.report.blends_refused = self.planner.blends_refused();
+        if self.report.blends_refused > 0 {
+            tracing::warn!(
+                "{} corners stopped exactly: every blend slot was held by the path ahead",
+                self.report.blends_refused
             );
         }
         if self.report.starved > 0 {

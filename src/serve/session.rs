@@ -436,6 +436,8 @@ impl MachineLoop {
         let mut last_trail_t = f64::NEG_INFINITY;
         let mut last_line = 0u32;
         let mut last_actual = self.standing.clone();
+        // Read every cycle into the same buffers (no allocation per cycle).
+        let mut status = run.status();
         let outcome = loop {
             match self.commands.try_recv() {
                 Ok(c) => self.run_command(&mut run, c),
@@ -443,7 +445,7 @@ impl MachineLoop {
                 Err(TryRecvError::Disconnected) => run.request_stop(),
             }
             let stepped = run.step();
-            let status = run.status();
+            run.status_into(&mut status);
             derivatives.update(status.t, &status.commanded, first);
             first = false;
             if self.snap.single_block && status.line != last_line && last_line != 0 {

@@ -42,9 +42,9 @@ pub fn blend_within(
     end: &PathPoint,
     contour: &[ContourPart<'_>],
     tolerance: f64,
-) -> Option<(Box<Quintic>, f64)> {
+) -> Option<(Quintic, f64)> {
     // The tolerance check needs only the curve's shape; the rest is computed once it passes.
-    let mut curve = Box::new(Quintic::shape(start, end)?);
+    let mut curve = Quintic::shape(start, end)?;
     let limit = TOLERANCE_SHARE * tolerance;
     let worst = match hull_deviation(&curve, contour, limit) {
         Some(w) => w,
@@ -212,19 +212,40 @@ fn halve(points: &[[f64; 6]; 6]) -> ([[f64; 6]; 6], [[f64; 6]; 6]) {
     (left, right)
 }
 
+/// Contour parts whose chord points [`sampled_deviation`] computes once, on the stack;
+/// those of a longer contour (a run of dense code: lines, whose two points cost little) are
+/// computed again for every sample. Both give the same distances.
+const CACHED_PARTS: usize = 4;
+
 /// The largest distance of the curve from `contour` at [`DEVIATION_SAMPLES`] − 1 interior
-/// points, if none exceeds `limit`.
+/// points, if none exceeds `limit`. Allocates nothing.
 fn sampled_deviation(curve: &Quintic, contour: &[ContourPart<'_>], limit: f64) -> Option<f64> {
-    let polylines: Vec<Polyline> = contour.iter().map(Polyline::through).collect();
+    let mut cached = [Polyline::EMPTY; CACHED_PARTS];
+    let cache = cached.get_mut(..contour.len());
+    let cached = match cache {
+        Some(slots) => {
+            for (slot, part) in slots.iter_mut().zip(contour) {
+                *slot = Polyline::through(part);
+            }
+            Some(&*slots)
+        }
+        None => None,
+    };
     let mut worst = 0.0f64;
     // The middle first: where a blend that is too long fails first.
     let half = DEVIATION_SAMPLES / 2;
     for k in std::iter::once(half).chain((1..DEVIATION_SAMPLES).filter(|&k| k != half)) {
         let p = curve.pose_at_parameter(k as f64 / DEVIATION_SAMPLES as f64);
-        let d = polylines
-            .iter()
-            .map(|line| line.distance(&p))
-            .fold(f64::INFINITY, f64::min);
+        let d = match cached {
+            Some(lines) => lines
+                .iter()
+                .map(|line| line.distance(&p))
+                .fold(f64::INFINITY, f64::min),
+            None => contour
+                .iter()
+                .map(|part| distance_to_part(&p, part))
+                .fold(f64::INFINITY, f64::min),
+        };
         // NaN distances count as too far.
         if d.is_nan() || d > limit {
             return None;
@@ -235,43 +256,79 @@ fn sampled_deviation(curve: &Quintic, contour: &[ContourPart<'_>], limit: f64) -
 }
 
 /// Distance (over X Y Z U V W) from `p` to a stretch of an element; never less than the
-/// true distance.
+/// true distance. Computes the chord points of [`Polyline::through`] one after the other,
+/// in the same order and so with the same result, without keeping them.
 pub fn distance_to_part(p: &Pose, part: &ContourPart<'_>) -> f64 {
-    Polyline::through(part).distance(p)
+    let (a, b) = (part.from.min(part.to), part.from.max(part.to));
+    match part.segment {
+        Segment::Line(_) => {
+            let (pa, pb) = (part.segment.position(a), part.segment.position(b));
+            f64::INFINITY.min(distance_to_chord(p, &pa, &pb)) + 0.0
+        }
+        seg => {
+            let (h, sagitta) = chords_of(seg, a, b);
+            let mut before = seg.position(a);
+            let mut nearest = f64::INFINITY;
+            for k in 1..=CURVE_CHORDS {
+                let next = seg.position(a + h * k as f64);
+                nearest = nearest.min(distance_to_chord(p, &before, &next));
+                before = next;
+            }
+            nearest + sagitta
+        }
+    }
+}
+
+/// Chord length (path distance) and sagitta of [`CURVE_CHORDS`] chords through the stretch
+/// `[a, b]` of a curved element.
+fn chords_of(seg: &Segment, a: f64, b: f64) -> (f64, f64) {
+    let kappa = Metric::Linear.norm(&seg.bounds().d2);
+    let h = (b - a) / CURVE_CHORDS as f64;
+    (h, h * h * kappa / 8.0)
 }
 
 /// A stretch of an element as chords through it, with the largest distance of the stretch
-/// from its chords (0 for a line).
+/// from its chords (0 for a line); the points are kept inline (no allocation).
+#[derive(Clone, Copy)]
 struct Polyline {
-    points: Vec<Pose>,
+    points: [Pose; CURVE_CHORDS + 1],
+    /// Points in use.
+    count: usize,
     sagitta: f64,
 }
 
 impl Polyline {
+    /// No points: no distance (infinite).
+    const EMPTY: Polyline = Polyline {
+        points: [Pose([0.0; 9]); CURVE_CHORDS + 1],
+        count: 0,
+        sagitta: 0.0,
+    };
+
     fn through(part: &ContourPart<'_>) -> Polyline {
         let (a, b) = (part.from.min(part.to), part.from.max(part.to));
+        let mut out = Polyline::EMPTY;
         match part.segment {
-            Segment::Line(_) => Polyline {
-                points: vec![part.segment.position(a), part.segment.position(b)],
-                sagitta: 0.0,
-            },
+            Segment::Line(_) => {
+                out.points[0] = part.segment.position(a);
+                out.points[1] = part.segment.position(b);
+                out.count = 2;
+            }
             seg => {
-                let bounds = seg.bounds();
-                let kappa = Metric::Linear.norm(&bounds.d2);
-                let h = (b - a) / CURVE_CHORDS as f64;
-                Polyline {
-                    points: (0..=CURVE_CHORDS)
-                        .map(|k| seg.position(a + h * k as f64))
-                        .collect(),
-                    sagitta: h * h * kappa / 8.0,
+                let (h, sagitta) = chords_of(seg, a, b);
+                for (k, point) in out.points.iter_mut().enumerate() {
+                    *point = seg.position(a + h * k as f64);
                 }
+                out.count = CURVE_CHORDS + 1;
+                out.sagitta = sagitta;
             }
         }
+        out
     }
 
     /// Distance from `p`, never less than the true distance from the stretch.
     fn distance(&self, p: &Pose) -> f64 {
-        self.points
+        self.points[..self.count]
             .windows(2)
             .map(|w| distance_to_chord(p, &w[0], &w[1]))
             .fold(f64::INFINITY, f64::min)

@@ -8,7 +8,9 @@
 
 mod bounds;
 pub mod corner;
+pub mod pool;
 pub mod quintic;
 
 pub use corner::{ContourPart, blend_within, distance_to_part};
+pub use pool::{BLEND_SLOTS, BlendPool};
 pub use quintic::Quintic;

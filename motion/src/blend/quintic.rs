@@ -20,8 +20,9 @@ pub const TABLE_INTERVALS: usize = 16;
 /// nearly stops and turns (a cusp), which no axis could follow at speed.
 const MIN_PARAMETER_SPEED: f64 = 1e-3;
 
-/// A quintic blend curve.
-#[derive(Debug, Clone, PartialEq)]
+/// A quintic blend curve. The default is the empty curve at the origin (length 0): what
+/// the slots of a [`super::BlendPool`] hold before a blend is written into them.
+#[derive(Debug, Clone, PartialEq, Default)]
 pub struct Quintic {
     /// Monomial coefficients per pose index: P(u) = Σ c[n]·uⁿ.
     c: [[f64; 6]; 9],

@@ -126,6 +126,7 @@ impl Planner {
                 &vertices,
                 &self.config.limits,
                 self.config.period,
+                &mut self.blends,
             )
         };
         // The vertices behind end at the start of the new front element.
@@ -348,7 +349,7 @@ mod tests {
                     d2: [0.0; 9],
                 };
                 match Quintic::hermite(&at(from), &at(to)) {
-                    Some(q) => Shape::Blend(Box::new(q)),
+                    Some(q) => Shape::Blend(std::sync::Arc::new(q)),
                     None => panic!("a blend"),
                 }
             }

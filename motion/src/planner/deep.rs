@@ -36,6 +36,14 @@ pub struct LowAhead {
     jerk: VecDeque<(f64, f64)>,
 }
 
+impl LowAhead {
+    /// Makes room for `n` entries in each queue.
+    pub fn reserve(&mut self, n: usize) {
+        self.accel.reserve(n);
+        self.jerk.reserve(n);
+    }
+}
+
 /// Appends `(end, value)` to a sliding-minimum queue.
 fn push_min(queue: &mut VecDeque<(f64, f64)>, end: f64, value: f64) {
     while queue.back().is_some_and(|&(_, v)| v >= value) {

@@ -33,6 +33,8 @@ mod deep;
 mod drops;
 mod move_hold;
 pub mod path;
+#[cfg(test)]
+mod pool_tests;
 mod run;
 mod scan;
 pub mod smooth;
@@ -46,6 +48,7 @@ mod through;
 
 pub use tcpm::{TCPM_DERATE, TableGeometry};
 
+use crate::blend::{BLEND_SLOTS, BlendPool};
 use crate::config::{AxisLimits, PlannerConfig};
 use crate::error::MotionError;
 use crate::geom::{Arc, AxisBounds, GeomError, Line, Poly, Segment, finite_pose, letter};
@@ -59,6 +62,14 @@ use std::collections::VecDeque;
 /// Pieces and events the planner holds at most before it stops asking for input (memory
 /// bound; the look-ahead distance is what normally decides).
 pub const BUFFER_CAPACITY: usize = 20_000;
+
+/// Pieces the planner makes room for when it is built (the look-ahead of a dense CAM
+/// pocket at the bench machine's speeds holds up to about 2 000).
+pub const RESERVED_PIECES: usize = 4096;
+
+/// Limits in the speed window, events, waiting elements and polyline vertices the planner
+/// makes room for when it is built (the pocket's window holds up to 64 limits).
+pub const RESERVED_LIMITS: usize = 512;
 
 /// Largest gap (mm or degrees) accepted between an op's start and the previous end point.
 /// The planner always continues from its own end point, so accepted gaps do not jump.
@@ -180,9 +191,23 @@ pub struct Planner {
     settled: scan::SettleMemo,
     /// A feed hold at the end of the next move (see `move_hold`).
     move_hold: move_hold::MoveHold,
+    /// Slots for the blend curves of the committed path, made here so that committing a
+    /// corner allocates nothing ([`BLEND_SLOTS`]).
+    blends: BlendPool,
 }
 
 impl Planner {
+    /// Corners stopped at exactly because every blend slot was held by the path ahead
+    /// (none with [`BLEND_SLOTS`] slots unless the look-ahead holds that many blends).
+    pub fn blends_refused(&self) -> u64 {
+        self.blends.refused()
+    }
+
+    /// Corner blends (and runs of dense code blended as one curve) made so far.
+    pub fn blends_made(&self) -> u64 {
+        self.blends.stored()
+    }
+
     /// A planner for a machine standing at `start`.
     pub fn new(config: PlannerConfig, start: Pose) -> Result<Self, MotionError> {
         config.validate()?;
@@ -206,7 +231,7 @@ impl Planner {
             + 4.0 * top * config.period
             + 1.0;
         let period = config.period;
-        Ok(Planner {
+        let mut planner = Planner {
             tolerance: config.tolerance,
             base_limits: config.limits,
             config,
@@ -243,7 +268,24 @@ impl Planner {
             cruise: cruise::Cruising::default(),
             settled: scan::SettleMemo::default(),
             move_hold: move_hold::MoveHold::default(),
-        })
+            blends: BlendPool::new(BLEND_SLOTS),
+        };
+        planner.reserve();
+        Ok(planner)
+    }
+
+    /// Reserves the queues' and buffers' room when the planner is built, so that the servo
+    /// loop does not grow them: [`RESERVED_PIECES`] pieces, [`RESERVED_LIMITS`] limits in
+    /// the window. A look-ahead beyond them grows them (an allocation per doubling).
+    fn reserve(&mut self) {
+        self.pieces.reserve(RESERVED_PIECES);
+        self.markers.reserve(RESERVED_LIMITS);
+        self.waiting.reserve(RESERVED_LIMITS);
+        self.vertices.reserve(RESERVED_LIMITS);
+        self.window.limits.reserve(RESERVED_LIMITS);
+        self.scratch.reserve(RESERVED_LIMITS);
+        self.settled.reserve(RESERVED_LIMITS);
+        self.low_ahead.reserve(RESERVED_LIMITS);
     }
 
     /// Tells the planner where the table axes of a table-table machine are: moves that turn

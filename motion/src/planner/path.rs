@@ -47,11 +47,12 @@ use super::corner_stop::{
 };
 use super::run;
 use super::smooth::{Stencil, split_point};
-use crate::blend::{ContourPart, Quintic, blend_within};
+use crate::blend::{BlendPool, ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, Line, Metric, PathPoint, Segment};
 use crate::limits::{Grip, Headroom, LimitError, PieceLimits, path_limits};
 use klar_interp::{Op, Pose, SourceLoc};
+use std::sync::Arc;
 
 /// Largest feed override, as a factor: path limits are prepared for it.
 pub const MAX_OVERRIDE: f64 = 1.5;
@@ -84,8 +85,9 @@ const MIN_BLEND: f64 = 1e-6;
 pub enum Shape {
     /// (Part of) a programmed element.
     Element(Segment),
-    /// A blend curve.
-    Blend(Box<Quintic>),
+    /// A blend curve, in a slot of the planner's [`BlendPool`] that the parts of the blend
+    /// share.
+    Blend(Arc<Quintic>),
 }
 
 impl Shape {
@@ -391,10 +393,11 @@ pub fn commit(
     vertices: &Vertices<'_>,
     limits: &[Option<AxisLimits>; 9],
     period: f64,
+    pool: &mut BlendPool,
 ) -> Committed {
     let mut out = Committed::default();
     if (cur.split.is_some() || cur.from_rest)
-        && let Some(done) = run::try_run(cur, rest, last, vertices)
+        && let Some(done) = run::try_run(cur, rest, last, vertices, pool)
     {
         return done;
     }
@@ -424,18 +427,20 @@ pub fn commit(
         return out;
     }
     let tol = cur.tolerance.min(next.tolerance);
+    // A corner that finds every blend slot held stops exactly (counted by the pool).
     let blendable = tol > 0.0
         && cur.segment.metric() == Metric::Linear
-        && next.segment.metric() == Metric::Linear;
+        && next.segment.metric() == Metric::Linear
+        && pool.can_store();
     if blendable {
-        if let Some(done) = try_corner(cur, next, after, tol, stencil, limits) {
+        if let Some(done) = try_corner(cur, next, after, tol, stencil, limits, pool) {
             return done;
         }
         if cur.split.is_some() {
             // The blend before ends at a split point whose curvature no blend here can take
             // over: stop there, then treat the rest of the line as a plain element.
             detach_split(cur);
-            if let Some(mut done) = try_corner(cur, next, None, tol, stencil, limits) {
+            if let Some(mut done) = try_corner(cur, next, None, tol, stencil, limits, pool) {
                 done.stop_first = true;
                 return done;
             }
@@ -525,8 +530,8 @@ fn varies(q: &Quintic, a: &PathPoint, b: &PathPoint) -> bool {
     m.norm(&a.d2).min(m.norm(&b.d2)) < EVEN_CURVATURE * q.bounds().curvature
 }
 
-/// Tries to blend the corner between `cur` and `next`; on success returns the pieces and
-/// sets `next`'s trim (and split point).
+/// Tries to blend the corner between `cur` and `next`; on success returns the pieces (the
+/// blend curve stored in `pool`) and sets `next`'s trim (and split point).
 fn try_corner(
     cur: &Element,
     next: &mut Element,
@@ -534,6 +539,7 @@ fn try_corner(
     tol: f64,
     stencil: &Stencil<'_>,
     limits: &[Option<AxisLimits>; 9],
+    pool: &mut BlendPool,
 ) -> Option<Committed> {
     let len = cur.segment.length();
     let nlen = next.segment.length();
@@ -630,9 +636,10 @@ fn try_corner(
             {
                 return None;
             }
+            // The caller made sure a slot is free; were none, the corner would stop.
+            let shape = Shape::Blend(pool.store(curve)?);
             let mut out = Committed::default();
             push_part(&mut out, cur, cur.trim, len - dl);
-            let shape = Shape::Blend(curve);
             for (part, loc) in cut.into_iter().flatten() {
                 out.pieces.push(NewPiece {
                     shape: shape.clone(),

@@ -6,7 +6,7 @@ use super::path::{
     min_feed,
 };
 use super::smooth::{end_point, split_point};
-use crate::blend::{ContourPart, blend_within};
+use crate::blend::{BlendPool, ContourPart, blend_within};
 use crate::geom::{Metric, PathPoint, Segment};
 use crate::limits::Headroom;
 
@@ -29,14 +29,16 @@ fn linear_only(e: &Element) -> bool {
 /// lines between. The run ends at the last line within [`RUN_LENGTH`] whose corners a split
 /// point allows, or at the end of the last line before a stop (`last`); where the blend
 /// leaves the tolerance band, runs half as long are tried. `None` when no run of at least
-/// two lines fits (the corner is then decided as usual).
+/// two lines fits (the corner is then decided as usual), or when `pool` has no free slot
+/// for the run's curve.
 pub(super) fn try_run(
     cur: &Element,
     rest: &mut [Waiting],
     last: bool,
     vertices: &Vertices<'_>,
+    pool: &mut BlendPool,
 ) -> Option<Committed> {
-    if !linear_only(cur) {
+    if !linear_only(cur) || !pool.has_free() {
         return None;
     }
     let len = cur.segment.length();
@@ -92,13 +94,13 @@ pub(super) fn try_run(
         None => return None,
     };
     if let Some((j, t)) = to_stop
-        && let Some(done) = run_to(cur, rest, j, &start, t, vertices, true)
+        && let Some(done) = run_to(cur, rest, j, &start, t, vertices, true, pool)
     {
         return Some(done);
     }
     let mut m = longest;
     while m >= 1 {
-        if let Some(done) = run_to(cur, rest, m, &start, tol, vertices, false) {
+        if let Some(done) = run_to(cur, rest, m, &start, tol, vertices, false, pool) {
             return Some(done);
         }
         m /= 2;
@@ -107,7 +109,9 @@ pub(super) fn try_run(
 }
 
 /// The run from `start` to the split point of the `m`-th waiting element (or to its end,
-/// where the path stops: `to_end`), if its blend keeps within `tol`.
+/// where the path stops: `to_end`), if its blend keeps within `tol`; its curve goes into
+/// `pool`.
+#[allow(clippy::too_many_arguments)] // the run's ends, its contour and where its curve goes
 fn run_to(
     cur: &Element,
     rest: &mut [Waiting],
@@ -116,6 +120,7 @@ fn run_to(
     tol: f64,
     vertices: &Vertices<'_>,
     to_end: bool,
+    pool: &mut BlendPool,
 ) -> Option<Committed> {
     let Segment::Line(line) = &rest.get(m)?.element.segment else {
         return None;
@@ -127,33 +132,37 @@ fn run_to(
         let p = split_point(line, &vertices.around(m), tol, SPLIT_MAX_ANGLE)?;
         (p, 0.5 * line.length())
     };
-    let mut contour = Vec::with_capacity(m + 2);
-    contour.push(ContourPart {
+    // The contour on the stack: the first element, the `m` before the last, the last.
+    let first = ContourPart {
         segment: &cur.segment,
         from: cur.trim,
         to: cur.segment.length(),
-    });
-    for w in &rest[..m] {
-        contour.push(ContourPart {
+    };
+    let mut parts = [first; RUN_ELEMENTS + 2];
+    let contour = parts.get_mut(..m + 2)?;
+    for (part, w) in contour[1..].iter_mut().zip(&rest[..m]) {
+        *part = ContourPart {
             segment: &w.element.segment,
             from: 0.0,
             to: w.element.segment.length(),
-        });
+        };
     }
-    contour.push(ContourPart {
+    contour[m + 1] = ContourPart {
         segment: &rest[m].element.segment,
         from: 0.0,
         to: upto,
-    });
-    let (curve, _) = blend_within(start, &end, &contour, tol)?;
+    };
+    let (curve, _) = blend_within(start, &end, contour, tol)?;
     let feed = rest[..=m]
         .iter()
         .fold(cur.feed, |f, w| min_feed(f, w.element.feed));
     let length = curve.length();
+    // The caller made sure a slot is free.
+    let shape = Shape::Blend(pool.store(curve)?);
     let mut out = Committed::default();
     let last = &mut rest[m].element;
     out.pieces.push(NewPiece {
-        shape: Shape::Blend(curve),
+        shape,
         offset: 0.0,
         length,
         feed,

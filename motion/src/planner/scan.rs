@@ -212,6 +212,12 @@ pub(super) struct SettleMemo {
 }
 
 impl SettleMemo {
+    /// Makes room for `n` limits in each list.
+    pub(super) fn reserve(&mut self, n: usize) {
+        self.raw.reserve(n);
+        self.settled.reserve(n);
+    }
+
     /// Settles `limits` (see [`speed::settle`]), reusing the last result when the list is
     /// the same as last time.
     fn settle(&mut self, limits: &mut Vec<Limit>) {

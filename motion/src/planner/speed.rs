@@ -556,6 +556,14 @@ pub struct Scratch {
     candidates: Vec<Action>,
 }
 
+impl Scratch {
+    /// Makes room for the ramps of `n` limits.
+    pub fn reserve(&mut self, n: usize) {
+        self.found.reserve(2 * n);
+        self.candidates.reserve(2 * n + 2);
+    }
+}
+
 /// The ramps from state `from` for the limits that `x` misses (`from` itself, or where the
 /// plain action from it would lead), the worst first (the largest ratio of distance needed
 /// to distance left); empty when it misses none.
