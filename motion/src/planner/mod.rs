@@ -42,6 +42,7 @@ pub mod tcpm;
 #[cfg(test)]
 mod test_machine;
 mod through;
+mod verdicts;
 
 pub use tcpm::{TCPM_DERATE, TableGeometry};
 
