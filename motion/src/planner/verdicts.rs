@@ -60,17 +60,37 @@ mod tests {
         // At rest anything is safe; at 100 mm/s braking from 1 mm ahead is not: a braking
         // ramp with 1000 mm/s² needs v²/(2A) = 5 mm and more.
         let states = [
-            Motion { s: 0.0, v: 0.0, a: 0.0 },
-            Motion { s: 0.0, v: 100.0, a: 0.0 },
-            Motion { s: 0.0, v: 1.0, a: -0.0 },
-            Motion { s: 0.0, v: 1.0, a: 0.0 },
+            Motion {
+                s: 0.0,
+                v: 0.0,
+                a: 0.0,
+            },
+            Motion {
+                s: 0.0,
+                v: 100.0,
+                a: 0.0,
+            },
+            Motion {
+                s: 0.0,
+                v: 1.0,
+                a: -0.0,
+            },
+            Motion {
+                s: 0.0,
+                v: 1.0,
+                a: 0.0,
+            },
         ];
         assert!(speed::check(&states[0], &w));
         assert!(!speed::check(&states[1], &w));
         let mut memo = Verdicts::default();
         for round in 0..2 {
             for x in &states {
-                assert_eq!(memo.check(x, &w), speed::check(x, &w), "round {round}: {x:?}");
+                assert_eq!(
+                    memo.check(x, &w),
+                    speed::check(x, &w),
+                    "round {round}: {x:?}"
+                );
             }
         }
         // Each state judged once: −0 and +0 are two states.
