@@ -226,7 +226,78 @@ impl PhaseStart {
     fn speed(&self, h: f64) -> f64 {
         self.v + self.a * h + 0.5 * self.j * h * h
     }
+
+    /// Lowest and highest speed over `[lo, hi]` within the phase: the ends and, where it
+    /// lies between them, the turning point of the quadratic.
+    fn speed_range(&self, lo: f64, hi: f64) -> (f64, f64) {
+        let (u, w) = (self.speed(lo), self.speed(hi));
+        let (mut low, mut high) = (u.min(w), u.max(w));
+        if self.j != 0.0 {
+            let turn = -self.a / self.j;
+            if turn > lo && turn < hi {
+                low = low.min(self.speed(turn));
+                high = high.max(self.speed(turn));
+            }
+        }
+        (low, high)
+    }
+
+    /// Whether the speed where the phase covers `distance` is at most `bound`, decided from
+    /// a narrow bracket round the time it gets there, found by Newton's method; `None` when
+    /// the bracket does not decide it (or the speed is not positive all phase long, so the
+    /// distance might not grow with time).
+    ///
+    /// The answer is the one of [`Ramp::speed_after_at_most`]'s bisection, whose final
+    /// lower end `lo` lies within one last bracket width `δ = d/2²⁴` before a time at
+    /// which the distance is reached: with a time `t_lo` before which the distance is
+    /// certainly not yet reached and `t_hi` after which it certainly is (each clear of the
+    /// target distance by far more than the rounding of evaluating it), `lo` lies in
+    /// `[t_lo − δ, t_hi]`, and when every speed there clears `bound` by `margin` on one
+    /// side, so does the speed at `lo`.
+    fn decide_near_root(&self, distance: f64, bound: f64, margin: f64) -> Option<bool> {
+        let (low, _) = self.speed_range(0.0, self.d);
+        if low.is_nan() || low <= 0.0 {
+            return None;
+        }
+        let size = self.s.abs()
+            + self.v.abs() * self.d
+            + 0.5 * self.a.abs() * self.d * self.d
+            + self.j.abs() * self.d * self.d * self.d / 6.0;
+        let gap = ROOT_GAP * size;
+        let mut t = ((distance - self.s) / self.v.max(low)).clamp(0.0, self.d);
+        for _ in 0..NEWTON_STEPS {
+            t = (t - (self.distance(t) - distance) / self.speed(t)).clamp(0.0, self.d);
+        }
+        let width = ROOT_WIDTH * self.d;
+        let (t_lo, t_hi) = ((t - width).max(0.0), (t + width).min(self.d));
+        let before = t_lo <= 0.0 || self.distance(t_lo) < distance - gap;
+        let after = self.distance(t_hi) > distance + gap;
+        if !(before && after) {
+            return None;
+        }
+        // Twice the last bracket's width: the halving rounds.
+        let last = 2.0 * self.d / f64::from(1u32 << SPEED_AFTER_STEPS);
+        let (low, high) = self.speed_range((t_lo - last).max(0.0), t_hi);
+        if high <= bound - margin {
+            Some(true)
+        } else if low > bound + margin {
+            Some(false)
+        } else {
+            None
+        }
+    }
 }
+
+/// Newton steps for the time at which a phase reaches a distance in
+/// [`PhaseStart::decide_near_root`].
+const NEWTON_STEPS: usize = 5;
+
+/// Half-width of the bracket round Newton's time, as a share of the phase's duration.
+const ROOT_WIDTH: f64 = 1e-9;
+
+/// How far the distance at the bracket's ends must clear the target, as a share of the
+/// size of the distance's terms over the phase: far above the rounding of evaluating it.
+const ROOT_GAP: f64 = 1e-12;
 
 impl Ramp {
     /// The ramp from speed `v0` and acceleration `a0` to speed `target`, with path
@@ -325,17 +396,12 @@ impl Ramp {
             return self.target <= bound;
         };
         let margin = DECIDE_MARGIN * (p.v.abs() + bound.abs() + p.a.abs() * p.d);
+        if let Some(side) = p.decide_near_root(distance, bound, margin) {
+            return side;
+        }
         let (mut lo, mut hi) = (0.0, p.d);
         for _ in 0..SPEED_AFTER_STEPS {
-            let (u, w) = (p.speed(lo), p.speed(hi));
-            let (mut low, mut high) = (u.min(w), u.max(w));
-            if p.j != 0.0 {
-                let turn = -p.a / p.j;
-                if turn > lo && turn < hi {
-                    low = low.min(p.speed(turn));
-                    high = high.max(p.speed(turn));
-                }
-            }
+            let (low, high) = p.speed_range(lo, hi);
             if high <= bound - margin {
                 return true;
             }
@@ -475,5 +541,23 @@ mod tests {
             }
         }
         assert!(decided > 10_000);
+    }
+
+    #[test]
+    fn the_bracket_round_the_root_decides_clear_bounds_and_leaves_the_close_ones() {
+        // Braking from 40 mm/s at 1000 mm/s² (after the jerk phase): the speed falls all
+        // along the hold, so a distance inside it has one time and one speed.
+        let r = Ramp::new(40.0, -1000.0, 10.0, 1000.0, 1e5);
+        let total = r.distance();
+        let d = 0.5 * total;
+        let p = r.phase_reaching(d).expect("inside the ramp");
+        let v = r.speed_after(d);
+        let margin = DECIDE_MARGIN * (p.v.abs() + v + p.a.abs() * p.d);
+        assert_eq!(p.decide_near_root(d, v + 0.01, margin), Some(true));
+        assert_eq!(p.decide_near_root(d, v - 0.01, margin), Some(false));
+        // At the bisection's own speed the bracket cannot tell: the full bisection decides.
+        assert_eq!(p.decide_near_root(d, v, margin), None);
+        assert!(r.speed_after_at_most(d, v));
+        assert!(!r.speed_after_at_most(d, v.next_down()));
     }
 }

@@ -45,6 +45,7 @@ pub mod tcpm;
 #[cfg(test)]
 mod test_machine;
 mod through;
+mod verdicts;
 
 pub use tcpm::{TCPM_DERATE, TableGeometry};
 

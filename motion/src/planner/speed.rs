@@ -47,6 +47,7 @@
 //! acceleration of lower speeds at fixed knees of the grip ([`brake_distance`]).
 
 use super::through::{CROSSING_SLACK, leaves_below, passes_under};
+use super::verdicts::Verdicts;
 use crate::limits::Grip;
 use crate::profile::Ramp;
 
@@ -554,6 +555,8 @@ pub struct Scratch {
     found: Vec<(Action, f64)>,
     /// Candidate ramps, in the order they are tried.
     candidates: Vec<Action>,
+    /// The check's verdicts on the states tried this period.
+    verdicts: Verdicts,
 }
 
 impl Scratch {
@@ -734,15 +737,20 @@ pub fn advance(x: &Motion, target: f64, w: &Window, dt: f64) -> Motion {
 /// [`advance`] working in the caller's `scratch` buffers (no allocation once they have
 /// grown).
 pub fn advance_with(x: &Motion, target: f64, w: &Window, dt: f64, scratch: &mut Scratch) -> Motion {
+    let Scratch {
+        found,
+        candidates,
+        verdicts,
+    } = scratch;
+    verdicts.clear();
     let go = go_step(x, target, w, dt);
-    if check(&go, w) {
+    if verdicts.check(&go, w) {
         return go;
     }
     // Candidate ramps: towards the limits the state itself misses, worst first, then
     // towards those the go ramp would miss, then a stop. The first whose result is safe
     // bounds a bisection for the highest safe speed between it and the go target: the
     // ramp rides the braking curve in front of the binding limit.
-    let Scratch { found, candidates } = scratch;
     candidates.clear();
     bindings(x, x, w, found, candidates);
     bindings(x, &go, w, found, candidates);
@@ -774,7 +782,7 @@ pub fn advance_with(x: &Motion, target: f64, w: &Window, dt: f64, scratch: &mut 
     for &(low, accel, jerk) in candidates.iter() {
         let low = low.max(0.0);
         let brake = ramp_step(x, low, accel, jerk, dt);
-        if !check(&brake, w) {
+        if !verdicts.check(&brake, w) {
             // Kept for the fallback below: the slowest of the ramps that go on forwards (the
             // speed can still come to rest without reversing), else the first.
             let forwards = brake.v >= 0.0 && rests_forwards(&brake, w);
@@ -802,7 +810,7 @@ pub fn advance_with(x: &Motion, target: f64, w: &Window, dt: f64, scratch: &mut 
             // Above the speed the state reaches anyway the grip of `mid` applies.
             let grip = w.grip.at(mid.max(peak_speed(x, jerk)));
             let trial = ramp_step(x, mid, accel.min(grip), jerk, dt);
-            if check(&trial, w) {
+            if verdicts.check(&trial, w) {
                 lo = mid;
                 best = trial;
             } else {
