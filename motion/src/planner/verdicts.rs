@@ -12,9 +12,22 @@
 use super::speed::{self, Motion, Window};
 
 /// Verdicts given within one period, by the trial state's bits.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone)]
 pub(super) struct Verdicts {
     seen: Vec<([u64; 3], bool)>,
+}
+
+/// Room for the verdicts of one period, reserved when the planner is built so that the
+/// servo loop does not grow it: a period's search judges about two dozen states (the
+/// bisection's steps and the candidate ramps); more only grow it once.
+const RESERVED_VERDICTS: usize = 128;
+
+impl Default for Verdicts {
+    fn default() -> Self {
+        Verdicts {
+            seen: Vec::with_capacity(RESERVED_VERDICTS),
+        }
+    }
 }
 
 impl Verdicts {
