@@ -148,7 +148,7 @@ pub(super) const SPEED_SLACK: f64 = 1e-9;
 pub(super) const LIMIT_SLACK: f64 = 1e-11;
 
 /// Distance slack when comparing braking distances (rounding), mm.
-pub(super) const DISTANCE_SLACK: f64 = 1e-12;
+const DISTANCE_SLACK: f64 = 1e-12;
 
 /// Shares of the grip's peak at which a braking ramp switches to the higher acceleration
 /// of lower speeds (see [`brake_distance`]), highest speed first.

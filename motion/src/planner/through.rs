@@ -3,8 +3,8 @@
 //! while still speeding up (see the notes of [`super::speed`]).
 
 use super::speed::{
-    DISTANCE_SLACK, JUDGE, LIMIT_SLACK, Limit, Motion, SPEED_SLACK, Window, brake_distance,
-    eased_by, easing_distance, settled_speed,
+    JUDGE, LIMIT_SLACK, Limit, Motion, SPEED_SLACK, Window, eased_by, easing_distance,
+    settled_speed,
 };
 use crate::limits::Grip;
 use crate::profile::Ramp;
@@ -29,17 +29,13 @@ const THROUGH_LIMITS: usize = 4;
 /// corner), meeting each with zero acceleration makes the braking stop and start again at
 /// every step; braking through them follows the steps' lower corners instead.
 ///
-/// A stop is a target too, judged as `speed::misses` judges it: with the full limits, since
-/// the path arrives there exactly. Otherwise a limit a little before a stop (the joint of
-/// the last two chords before a corner stop) would be met with zero acceleration at the
-/// speed the backward pass left it, and the braking would pause there for a few
-/// milliseconds before going on to rest.
-///
 /// Only a plain braking ramp counts: one whose state is within those acceleration limits
 /// and never speeds up again (its speed falls all the way, so it is below `l`'s on all of
 /// `l`'s stretch once it is at its start). A state braking harder than the pieces ahead
 /// allow would ease with their low jerk and could dip far below `m`'s speed before coming
-/// back up: no way to meet `l`. The limits between `l` and `m` are judged on their own.
+/// back up: no way to meet `l`. Nor is a stop a target: stops are met exactly with the
+/// full limits (`speed::misses`), from the zero-acceleration ramps of the limits before
+/// them. The limits between `l` and `m` are judged on their own.
 pub(super) fn passes_under(x: &Motion, l: &Limit, rest: &[Limit]) -> Option<(f64, Grip, f64)> {
     if x.a > 0.0 {
         return None;
@@ -57,29 +53,22 @@ pub(super) fn passes_under(x: &Motion, l: &Limit, rest: &[Limit]) -> Option<(f64
         if hard > THROUGH_LIMITS {
             return None;
         }
-        if m.speed >= l.speed {
+        // A stop is met with the full limits, exactly (see `misses`): it is left to the
+        // ramps that meet the limits before it with zero acceleration.
+        if m.speed >= l.speed || m.speed <= 0.0 {
             continue;
         }
-        // A stop is judged with the full limits, as `misses` judges it (the path arrives
-        // there exactly, riding its braking curve); other limits with the checks' share.
-        let stop = m.speed <= 0.0;
-        let share = if stop { 1.0 } else { JUDGE };
-        let (full, judged) = (grip.at(x.v), jerk * share);
-        let accel = share * full;
+        let (full, judged) = (grip.at(x.v), jerk * JUDGE);
+        let accel = JUDGE * full;
         if accel <= 0.0 || -x.a > full * (1.0 + SPEED_SLACK) || settled_speed(x, judged) < m.speed {
             continue;
         }
         let ramp = Ramp::new(x.v, x.a, m.speed, accel, judged);
-        let fits = if stop {
-            brake_distance(x, 0.0, &grip, jerk) <= m.at - x.s + DISTANCE_SLACK
-        } else {
-            ramp.distance() <= m.at - x.s
-        };
         // The ramp's speed only falls: already within `l`'s speed, it passes below it.
         let below = |r: &Ramp| {
             x.v <= l.own || r.speed_after_at_most(l.at - x.s, l.own * (1.0 + LIMIT_SLACK))
         };
-        if fits && below(&ramp) {
+        if ramp.distance() <= m.at - x.s && below(&ramp) {
             return Some((m.speed, grip, jerk));
         }
     }
@@ -121,7 +110,7 @@ mod tests {
     }
 
     #[test]
-    fn braking_through_needs_a_plain_braking_ramp_to_a_lower_limit() {
+    fn braking_through_needs_a_plain_braking_ramp_to_a_lower_limit_that_is_no_stop() {
         // A limit of 24 mm/s 0.3 mm ahead, one of 21.6 mm/s 0.6 mm ahead.
         let l = limit(0.3, 24.0, 1000.0, 1e5);
         let lower = limit(0.6, 21.6, 1000.0, 1e5);
@@ -144,29 +133,9 @@ mod tests {
         // Nor when the state brakes harder than those pieces allow.
         let low_grip = limit(0.6, 21.6, 200.0, 1e5);
         assert!(passes_under(&x, &l, &[low_grip]).is_none());
-        // Nor while speeding up.
+        // Nor towards a stop, nor while speeding up.
+        let stop = limit(0.6, 0.0, 1000.0, 1e5);
+        assert!(passes_under(&x, &l, &[stop]).is_none());
         assert!(passes_under(&state(100.0), &l, &[lower]).is_none());
-    }
-
-    #[test]
-    fn braking_through_towards_a_stop_needs_the_stop_met_with_the_full_limits() {
-        // From 30 mm/s braking at 300 mm/s² (A 1000 mm/s², J 1e5 mm/s³) the fastest stop
-        // takes, by hand: 7 ms raising the deceleration to A (0.19693 mm, down to
-        // 25.45 mm/s), 20.45 ms at A (0.31135 mm, down to 5 mm/s) and 10 ms easing it
-        // (0.01667 mm): 0.52495 mm. It passes 0.3 mm at 21.0 mm/s, below a limit of 24 there.
-        let l = limit(0.3, 24.0, 1000.0, 1e5);
-        let x = Motion {
-            s: 0.0,
-            v: 30.0,
-            a: -300.0,
-        };
-        let far = limit(0.526, 0.0, 1000.0, 1e5);
-        assert_eq!(passes_under(&x, &l, &[far]).map(|t| t.0), Some(0.0));
-        let near = limit(0.524, 0.0, 1000.0, 1e5);
-        assert!(passes_under(&x, &l, &[near]).is_none());
-        // Not when the stop's braking would cross the limit too fast: a limit of 20 mm/s at
-        // 0.3 mm (the ramp is at 21.0 mm/s there).
-        let low = limit(0.3, 20.0, 1000.0, 1e5);
-        assert!(passes_under(&x, &low, &[far]).is_none());
     }
 }
