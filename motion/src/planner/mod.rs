@@ -31,6 +31,7 @@ use commit::{path_feed, piece_error};
 mod cruise;
 mod deep;
 mod drops;
+mod handover;
 mod move_hold;
 pub mod path;
 #[cfg(test)]
@@ -810,6 +811,9 @@ impl Planner {
             self.config.period,
             &mut self.scratch,
         );
+        if let Some(split) = self.hand_over(&before, &next, target) {
+            next = split;
+        }
         // Never past the end of the committed path or the next stop.
         let stop = self.next_stop();
         if next.s > stop {
