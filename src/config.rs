@@ -248,6 +248,13 @@ pub struct CanopenSpindleConfig {
     pub bus: String,
     /// The drive (see docs/canopen.md).
     pub drive: klar_drivers::cia402::SpindleConfig,
+    /// On a simulated bus: fraction of the drive's speed lost per mm² of chip
+    /// cross-section under cut (0: no dip), as the simulated spindle's `load_droop`.
+    #[serde(default)]
+    pub load_droop: f64,
+    /// On a simulated bus: time constant of the speed dip under cut, s.
+    #[serde(default = "default_load_time_constant")]
+    pub load_time_constant: f64,
 }
 
 /// Which backend drives the spindle.

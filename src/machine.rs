@@ -3,9 +3,6 @@
 
 use crate::config::{BackendConfig, MachineConfig, SimSpindleConfig, SpindleBackendConfig};
 use crate::runtime::AxisStart;
-use klar_drivers::can::memory::MemoryBus;
-use klar_drivers::can::slcan::{SlcanBus, SlcanOptions};
-use klar_drivers::cia402::{BusConfig, CanOpenConfig, Cia402Backend, DriveConfig};
 use klar_drivers::modbus::limits as modbus_limits;
 use klar_drivers::modbus::{ModbusServo, ModbusVfd};
 use klar_drivers::stepdir::limits as stepdir_limits;
@@ -14,13 +11,16 @@ use klar_motion::{
     AxisBackend, AxisFeedback, BackendError, Setpoint, SpindleBackend, SpindleFeedback,
 };
 use klar_sim::axis::SimBackend;
-use klar_sim::cia402::{SimCia402Drive, SimDriveConfig, serve_on_slcan};
 use klar_sim::modbus::{PositioningLimits, simulate_servo};
 use klar_sim::modbus::{SimSpindle, SpindleParams, simulate_vfd};
-use klar_sim::plant::SimAxisParams;
 use klar_sim::stepper::{NoDelay, PinRole, SimPin, SwitchPositions, stepper};
 use std::any::Any;
 use std::collections::BTreeMap;
+
+mod canopen;
+mod loaded;
+
+use canopen::{CanGroup, open_canopen};
 
 /// One backend and the machine axes it serves.
 struct BackendSlot {
@@ -204,116 +204,11 @@ fn sim_spindle_params(max_rpm: f64, sim: &SimSpindleConfig) -> SpindleParams {
     }
 }
 
-/// Axes of one CANopen bus gathered from the machine's axes and spindle.
-#[derive(Default)]
-struct CanGroup {
-    axes: Vec<usize>,
-    letters: Vec<klar_interp::AxisLetter>,
-    drives: Vec<DriveConfig>,
-    plants: Vec<(SimAxisParams, f64)>,
-    spindle: Option<klar_drivers::cia402::SpindleConfig>,
-}
-
 fn open_err(what: impl Into<String>, e: &dyn std::fmt::Display) -> MachineError {
     MachineError::Open {
         what: what.into(),
         message: e.to_string(),
     }
-}
-
-/// `message` with the axis of every configured node it names added at its end (`node 3 is
-/// axis Z`), so that a start-up error says which axis is concerned.
-fn name_axes(message: &str, letters: &[(u8, String)]) -> String {
-    let named: Vec<String> = letters
-        .iter()
-        .filter(|(node, _)| {
-            let n = node.to_string();
-            let bytes = message.as_bytes();
-            message.match_indices(&n).any(|(at, _)| {
-                let before = message[..at].trim_end_matches(['[', ' ', ',']);
-                let after = bytes.get(at + n.len()).copied();
-                (before.ends_with("node") || before.ends_with("node(s)"))
-                    && !after.is_some_and(|b| b.is_ascii_digit())
-            })
-        })
-        .map(|(node, what)| format!("node {node} is {what}"))
-        .collect();
-    if named.is_empty() {
-        message.to_string()
-    } else {
-        format!("{message} ({})", named.join(", "))
-    }
-}
-
-/// Opens a CANopen bus with its drives; returns the backend and what must stay alive.
-fn open_canopen(
-    name: &str,
-    network: &CanOpenConfig,
-    group: CanGroup,
-    period: f64,
-) -> Result<(Cia402Backend, Vec<Box<dyn Any>>), MachineError> {
-    let what = format!("CANopen bus {name}");
-    let mut letters: Vec<(u8, String)> = group
-        .drives
-        .iter()
-        .zip(&group.letters)
-        .map(|(d, l)| (d.node, format!("axis {l}")))
-        .collect();
-    if let Some(s) = &group.spindle {
-        letters.push((s.node, "the spindle".into()));
-    }
-    let mut config = network.clone();
-    config.drives = group.drives;
-    config.spindle = group.spindle;
-    let mut sim_drives = Vec::new();
-    if matches!(
-        config.bus,
-        BusConfig::Sim { .. } | BusConfig::SimSlcan { .. }
-    ) {
-        for (d, (plant, start)) in config.drives.iter().zip(group.plants) {
-            let mut plant = plant;
-            plant.counts_per_unit = d.counts_per_unit.abs();
-            let (drive, _control) = SimCia402Drive::new(SimDriveConfig {
-                node: d.node,
-                plant,
-                start_position: start,
-            });
-            sim_drives.push(drive);
-        }
-        if let Some(s) = &config.spindle {
-            let (drive, _control) = SimCia402Drive::new(SimDriveConfig {
-                node: s.node,
-                plant: klar_sim::cia402::spindle_plant(s.counts_per_rev),
-                start_position: 0.0,
-            });
-            sim_drives.push(drive);
-        }
-    }
-    let mut companions: Vec<Box<dyn Any>> = Vec::new();
-    let backend = match config.bus {
-        BusConfig::Sim { .. } => {
-            let bus = MemoryBus::new();
-            for d in sim_drives {
-                bus.attach(Box::new(d));
-            }
-            let endpoint = bus.endpoint();
-            companions.push(Box::new(bus));
-            Cia402Backend::with_bus(&config, period, Box::new(endpoint))
-        }
-        BusConfig::SimSlcan { bitrate } => {
-            let (host, adapter) =
-                serialport::TTYPort::pair().map_err(|e| open_err(what.clone(), &e))?;
-            let runner = serve_on_slcan(adapter, bitrate, sim_drives)
-                .map_err(|e| open_err(what.clone(), &e))?;
-            companions.push(Box::new(runner));
-            let line = SlcanBus::from_tty(host, SlcanOptions::host(bitrate))
-                .map_err(|e| open_err(what.clone(), &e))?;
-            Cia402Backend::with_bus(&config, period, Box::new(line))
-        }
-        _ => Cia402Backend::open(&config, period),
-    }
-    .map_err(|e| open_err(what, &name_axes(&e.to_string(), &letters)))?;
-    Ok((backend, companions))
 }
 
 /// Where the axes of `config` stand, read from the drives that measure their own position
@@ -439,7 +334,9 @@ impl MachineIo {
         }
         if let Some(SpindleBackendConfig::Canopen(c)) = config.spindle.as_ref().map(|s| &s.backend)
         {
-            can.entry(c.bus.clone()).or_default().spindle = Some(c.drive.clone());
+            let group = can.entry(c.bus.clone()).or_default();
+            group.spindle = Some(c.drive.clone());
+            group.spindle_load = (c.load_droop, c.load_time_constant);
         }
         let mut can_spindle: Option<Box<dyn SpindleBackend>> = None;
         for (name, group) in can {
@@ -448,10 +345,10 @@ impl MachineIo {
             };
             let axes = group.axes.clone();
             let has_spindle = group.spindle.is_some();
-            let (backend, keep) = open_canopen(&name, network, group, period)?;
+            let (backend, keep, control) = open_canopen(&name, network, group, period)?;
             companions.extend(keep);
             if has_spindle && let Some(sp) = backend.spindle() {
-                can_spindle = Some(Box::new(sp));
+                can_spindle = Some(loaded::with_sim_load(Box::new(sp), control));
             }
             slots.push(BackendSlot {
                 backend: Box::new(backend),

@@ -683,7 +683,11 @@ impl<'a, 'w> Run<'a, 'w> {
         }
         let wait = !self.report.realtime;
         let mut fed = self.feed_planner(wait);
+        // A stop waiting for the retract after a geared pass ends once that hold is in force.
+        let stop_waits =
+            self.pass_hold.is_some() || (self.planner.hold_pending() && !self.planner.is_held());
         if self.planner.path_speed() == 0.0
+            && !stop_waits
             && let Some(pending) = self.stopping.take()
         {
             return Err(self.end_path_stop(pending));

@@ -5,58 +5,24 @@
 
 mod common;
 
+use common::hold::run_with_hold;
 use common::{distance_to_rectangle, program, temp_program};
 use klar::config::MachineConfig;
 use klar::monitor::{StopCause, StopKind};
 use klar::runtime::{Run, RunError, RunOptions};
-use klar::trace::Trace;
 use klar_interp::AxisLetter;
 
 #[test]
 fn a_feed_hold_on_the_contour_rests_on_it_and_resumes_along_it() {
     let machine = MachineConfig::builtin_mill();
     let path = program("rectangle.h");
-    let mut buf = Vec::new();
-    let mut held_at = None;
-    let mut rest_cycles = 0;
-    {
-        let mut run = Run::start(
-            &path,
-            &machine,
-            RunOptions {
-                realtime: false,
-                trace: Some(&mut buf),
-            },
-        )
-        .unwrap_or_else(|f| panic!("{}", f.error));
-        loop {
-            let status = run.status();
-            // Hold on the long top edge (block 10, L X+80 at Y 60) while cutting at Z-5.
-            if held_at.is_none()
-                && status.line == 11
-                && status.path_speed > 0.0
-                && status.commanded[0] > 40.0
-            {
-                run.hold();
-                held_at = Some(status.t);
-            }
-            if held_at.is_some() && status.held && status.path_speed == 0.0 {
-                rest_cycles += 1;
-                if rest_cycles == 300 {
-                    run.resume();
-                }
-            }
-            match run.step() {
-                Ok(true) => {}
-                Ok(false) => break,
-                Err(e) => panic!("run failed: {e}"),
-            }
-        }
-        run.finish(None).unwrap_or_else(|f| panic!("{}", f.error));
-    }
-    assert!(held_at.is_some(), "the hold point was never reached");
-    assert!(rest_cycles >= 300, "the hold never came to rest");
-    let trace = Trace::parse(&String::from_utf8(buf).unwrap()).unwrap();
+    // Hold on the long top edge (block 10, L X+80 at Y 60) while cutting at Z-5; resume
+    // after 300 cycles at rest.
+    let held = run_with_hold(&path, &machine, 300, |s| {
+        s.line == 11 && s.path_speed > 0.0 && s.commanded[0] > 40.0
+    });
+    assert!(held.resumed > held.asked);
+    let trace = held.trace;
     let x = trace.column("X").unwrap();
     let y = trace.column("Y").unwrap();
     let z = trace.column("Z").unwrap();

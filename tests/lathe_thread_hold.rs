@@ -5,83 +5,15 @@
 
 mod common;
 
+use common::hold::run_with_hold;
 use common::program;
 use common::threads::{angle_apart, lead_error, passes, start_angle};
 use klar::config::MachineConfig;
-use klar::runtime::{Run, RunOptions, RunStatus};
+use klar::runtime::{Run, RunOptions};
 use klar::trace::Trace;
 
 /// Rows the axes must stand still before the test resumes.
 const REST_ROWS: usize = 400;
-
-/// What happened around the hold.
-struct Held {
-    trace: Trace,
-    /// Machine time the hold was asked for, s.
-    asked: f64,
-    /// Machine time of the resume, s.
-    resumed: f64,
-}
-
-/// Runs `file` on `machine`, asks for a feed hold once `when` says so, resumes after the
-/// commanded position has stood still for [`REST_ROWS`] cycles, and runs to the end.
-fn run_with_hold(
-    file: &std::path::Path,
-    machine: &MachineConfig,
-    when: impl Fn(&RunStatus) -> bool,
-) -> Held {
-    let mut buf = Vec::new();
-    let mut asked = None;
-    let mut resumed = None;
-    {
-        let mut run = Run::start(
-            file,
-            machine,
-            RunOptions {
-                realtime: false,
-                trace: Some(&mut buf),
-            },
-        )
-        .unwrap_or_else(|f| panic!("{}", f.error));
-        let mut last: Vec<f64> = Vec::new();
-        let mut still = 0;
-        loop {
-            let status = run.status();
-            if asked.is_some() && resumed.is_none() {
-                assert!(
-                    status.held,
-                    "the hold shows from the request on: {status:?}"
-                );
-                still = if status.commanded == last {
-                    still + 1
-                } else {
-                    0
-                };
-                last = status.commanded.clone();
-                if still == REST_ROWS {
-                    run.resume();
-                    resumed = Some(status.t);
-                }
-            }
-            if asked.is_none() && when(&status) {
-                run.hold();
-                asked = Some(status.t);
-            }
-            match run.step() {
-                Ok(true) => {}
-                Ok(false) => break,
-                Err(e) => panic!("run failed: {e}"),
-            }
-        }
-        run.finish(None).unwrap_or_else(|f| panic!("{}", f.error));
-    }
-    let trace = Trace::parse(&String::from_utf8(buf).expect("UTF-8")).expect("trace parses");
-    Held {
-        trace,
-        asked: asked.expect("the hold point was reached"),
-        resumed: resumed.expect("the axes came to rest and the run resumed"),
-    }
-}
 
 fn lathe_canopen() -> MachineConfig {
     let file = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/lathe-canopen.toml");
@@ -90,7 +22,7 @@ fn lathe_canopen() -> MachineConfig {
 
 /// `thread_g33.nc` with a hold asked for half-way through the second pass (N31, X19.2).
 fn hold_in_a_thread_pass(machine: &MachineConfig) {
-    let held = run_with_hold(&program("lathe/thread_g33.nc"), machine, |s| {
+    let held = run_with_hold(&program("lathe/thread_g33.nc"), machine, REST_ROWS, |s| {
         (s.commanded[0] - 9.6).abs() < 1e-9 && s.commanded[1] < -12.0
     });
     let trace = &held.trace;
@@ -194,10 +126,11 @@ fn a_hold_in_a_thread_pass_on_canopen_drives_finishes_the_pass_and_the_retract()
     hold_in_a_thread_pass(&lathe_canopen());
 }
 
-/// `tapping_g36.nc` (M8×1.25 from Z2 to Z-12) with a hold asked for half-way down.
+/// `tapping_g36.nc` (M8×1.25 from Z2 to Z-12) with a hold asked for half-way down the
+/// stroke in, at Z-5 by the run's status.
 fn hold_in_a_rigid_tap(machine: &MachineConfig) {
-    let held = run_with_hold(&program("lathe/tapping_g36.nc"), machine, |s| {
-        s.commanded[0].abs() < 1e-9 && s.commanded[1] < -6.0
+    let held = run_with_hold(&program("lathe/tapping_g36.nc"), machine, REST_ROWS, |s| {
+        s.line == 13 && s.commanded[0].abs() < 1e-9 && s.commanded[1] < -5.0
     });
     let trace = &held.trace;
     let (t, z, za, s) = (
@@ -209,6 +142,16 @@ fn hold_in_a_rigid_tap(machine: &MachineConfig) {
     let rows: Vec<usize> = (0..t.len())
         .filter(|&i| t[i] > held.asked && t[i] <= held.resumed)
         .collect();
+    // The request came inside the stroke in: the slide was going down, half-way.
+    let z_asked = held.asked_at.commanded[1];
+    assert!((-5.1..-5.0).contains(&z_asked), "asked at Z {z_asked}");
+    let first = rows[0];
+    assert!(
+        z[first] < z[first - 1] && z[first] > -12.0 + 1.0,
+        "row {first} after the request: Z {} after {}",
+        z[first],
+        z[first - 1]
+    );
     // The tap goes on to the bottom and back out to its start Z2, geared to the angle all
     // the way (through the reversal), and stands there until the resume.
     let bottom = rows.iter().map(|&i| z[i]).fold(f64::INFINITY, f64::min);
@@ -312,7 +255,7 @@ fn a_hold_in_a_g31_pass_rests_after_the_cycles_retract() {
     assert!(plain_passes.len() >= 3, "{} passes", plain_passes.len());
     // Half-way through the second pass: below Z-10 at its depth.
     let second_x = plain_passes[1].x[0];
-    let held = run_with_hold(&file, &machine, |s| {
+    let held = run_with_hold(&file, &machine, REST_ROWS, |s| {
         (s.commanded[0] - second_x).abs() < 1e-9 && s.commanded[1] < -10.0
     });
     let trace = &held.trace;

@@ -264,7 +264,7 @@ fn check_refuses_threading_on_a_spindle_without_an_encoder() {
 }
 
 #[test]
-fn a_stop_requested_inside_a_pass_takes_effect_at_its_end() {
+fn a_stop_requested_inside_a_pass_takes_effect_after_the_pass_and_its_retract() {
     use klar::runtime::{Run, RunOptions};
     let machine = MachineConfig::builtin_lathe();
     let path = program("lathe/thread_g33.nc");
@@ -303,9 +303,11 @@ fn a_stop_requested_inside_a_pass_takes_effect_at_its_end() {
     );
     let (e, z_end, x_end) = end.expect("the stop ended the run");
     assert!(matches!(e, klar::runtime::RunError::Stopped { .. }), "{e}");
-    // The pass ran to its end point Z-30 at its depth before the stop, and nothing after it.
+    // The pass ran to its end point Z-30 at its depth, then the retract N22 G0 X24 (radius
+    // 12) out of the groove, and the run stopped there: not in the groove, not on the way
+    // back to Z6.
     assert!((z_end + 30.0).abs() < 1e-9, "stopped at Z {z_end}");
-    assert!((x_end - 9.8).abs() < 1e-9, "stopped at X {x_end}");
+    assert!((x_end - 12.0).abs() < 1e-9, "stopped at X {x_end}");
 }
 
 #[test]

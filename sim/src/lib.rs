@@ -7,6 +7,7 @@
 //!   switch, e-stop) on a schedule.
 //! - [`cia402`]: a simulated CANopen CiA 402 drive.
 //! - [`modbus`]: simulated Modbus RTU devices (servo drive, spindle VFD).
+//! - [`load`]: the speed dip of a simulated spindle under cut.
 //! - [`stepper`]: a simulated stepper motor and switches behind step/dir pins.
 
 #![warn(missing_docs)]
@@ -14,6 +15,7 @@
 pub mod axis;
 pub mod cia402;
 pub mod faults;
+pub mod load;
 pub mod modbus;
 pub mod plant;
 pub mod stepper;

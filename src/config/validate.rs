@@ -141,6 +141,13 @@ impl MachineConfig {
                     if !self.canopen.contains_key(&c.bus) {
                         return Err(format!("spindle: no [canopen.{}] bus", c.bus));
                     }
+                    if !(c.load_droop.is_finite() && c.load_droop >= 0.0) {
+                        return Err(format!(
+                            "spindle load_droop {} must be a number ≥ 0",
+                            c.load_droop
+                        ));
+                    }
+                    positive("spindle load_time_constant", c.load_time_constant)?;
                     None
                 }
                 SpindleBackendConfig::Modbus(m) => {

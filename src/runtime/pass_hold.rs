@@ -8,7 +8,8 @@
 //! after it (the retract out of the groove) run to its end, and holds there. A feed hold
 //! during a rigid tap lets the tap finish, the reversal and the stroke back out to the
 //! set-up clearance included, and holds where it ends. Resuming goes on with the program;
-//! resuming before the hold has taken effect cancels it.
+//! resuming before the hold has taken effect cancels it. A stop asked for during a geared
+//! pass (operator or caller) waits the same way before the run ends (`stop`).
 
 use super::Run;
 

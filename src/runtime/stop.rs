@@ -49,14 +49,21 @@ impl Run<'_, '_> {
             .collect()
     }
 
-    /// Starts a feed hold that ends the run with `error` once the path is at rest.
+    /// Starts a feed hold that ends the run with `error` once the path is at rest. A stop
+    /// the operator or the caller asks for during a pass geared to the spindle waits like a
+    /// feed hold (see `pass_hold`): a thread pass runs to its end and the retract after it
+    /// runs before the run stops, out of the groove; a rigid tap ends out of the hole.
     pub(super) fn begin_path_stop(
         &mut self,
         cause: StopCause,
         axis: Option<AxisLetter>,
         error: RunError,
     ) {
-        self.planner.hold();
+        if matches!(cause, StopCause::Requested | StopCause::Operator) && self.in_geared_pass() {
+            self.defer_hold();
+        } else {
+            self.planner.hold();
+        }
         self.stopping = Some(PendingStop {
             report: StopReport {
                 cause,

@@ -3,6 +3,7 @@
 
 #![allow(dead_code)]
 
+pub mod hold;
 pub mod mill5;
 pub mod peers;
 pub mod threads;

@@ -12,9 +12,12 @@
 //!
 //! klar's cuts (radial recess turning on an outside contour):
 //!
-//! - Tools carry no cutting width in klar's tool data, so G869 takes it as `SB` (mm), the
-//!   name of the cutting width in the control's tool table. The tool's reference point is
-//!   the corner at the +Z end of its width: standing at z it covers z − SB … z.
+//! - The manual's G869 has no word for the cutting width: its `P` is the largest infeed
+//!   (unlike G860/G866/G870, whose `P` is the cutting width) and `B` the offset width; the
+//!   control takes the width from the tool table. Tools carry no cutting width in klar's
+//!   tool data, so G869 takes it as `SB` (mm), the name of the cutting width in that tool
+//!   table; `P` stays the infeed as in the manual. The tool's reference point is the
+//!   corner at the +Z end of its width: standing at z it covers z − SB … z.
 //! - With the oversizes the tool keeps K away from the contour along Z and I/2 along X: at
 //!   a reference position z the lowest radius it may reach is the highest contour point
 //!   under z − SB − K … z + K, raised by I/2 (points exactly on the window's edges do not

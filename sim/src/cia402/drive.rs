@@ -27,8 +27,6 @@
 //! Modes of operation outside the supported set ([`SimCia402Drive::with_modes`]) are
 //! refused with SDO abort 0x0609_0030 (invalid value for parameter).
 
-use std::sync::{Arc, Mutex, MutexGuard};
-
 use klar_drivers::can::CanFrame;
 use klar_drivers::can::memory::BusDevice;
 use klar_drivers::canopen::pdo::{COB_INVALID, PdoEntry};
@@ -40,10 +38,11 @@ use klar_drivers::cia402::objects::*;
 use klar_drivers::cia402::state::*;
 use klar_motion::{AxisFault, AxisState, Setpoint};
 
+use super::control::SimDriveControl;
 use super::dictionary::drive_dictionary;
 use super::od::{ObjectDictionary, SdoServer};
 use super::profile::{Profile, VelocityRamp};
-use super::touch_probe::{ProbeInput, TouchProbe};
+use super::touch_probe::TouchProbe;
 use crate::plant::{ServoPlant, SimAxisParams};
 
 /// EMCY code the simulated drive sends for a limit switch (device specific).
@@ -69,59 +68,6 @@ pub struct Injection {
     pub truncate_tpdos: bool,
     /// Do not answer SDO requests.
     pub ignore_sdo: bool,
-}
-
-/// A handle to inspect and disturb a simulated drive from outside.
-#[derive(Debug, Clone, Default)]
-pub struct SimDriveControl {
-    shared: Arc<Mutex<Shared>>,
-}
-
-#[derive(Debug, Clone, Default)]
-struct Shared {
-    injection: Injection,
-    position: f64,
-    velocity: f64,
-    state: Option<PowerState>,
-    syncs: u64,
-    probe_input: Option<ProbeInput>,
-}
-
-impl SimDriveControl {
-    fn lock(&self) -> MutexGuard<'_, Shared> {
-        self.shared.lock().unwrap_or_else(|p| p.into_inner())
-    }
-
-    /// Changes the injected faults.
-    pub fn inject(&self, f: impl FnOnce(&mut Injection)) {
-        f(&mut self.lock().injection);
-    }
-
-    /// The drive's true (physical) plant position.
-    pub fn position(&self) -> f64 {
-        self.lock().position
-    }
-
-    /// The drive's true (physical) plant velocity, units per second.
-    pub fn velocity(&self) -> f64 {
-        self.lock().velocity
-    }
-
-    /// The drive's CiA 402 state (`None` before the first SYNC).
-    pub fn power_state(&self) -> Option<PowerState> {
-        self.lock().state
-    }
-
-    /// Wires the drive's touch-probe input to a trigger position (`None`: nothing
-    /// connected); see [`ProbeInput`].
-    pub fn set_probe_input(&self, input: Option<ProbeInput>) {
-        self.lock().probe_input = input;
-    }
-
-    /// SYNCs processed while operational.
-    pub fn syncs(&self) -> u64 {
-        self.lock().syncs
-    }
 }
 
 /// The modes of operation a simulated drive supports unless told otherwise.
@@ -424,7 +370,8 @@ impl SimCia402Drive {
             }
             PowerState::OperationEnabled if mode == MODE_CSV => {
                 let v = f64::from(self.od.u32(TARGET_VELOCITY, 0) as i32) / self.counts_per_unit();
-                let p = self.csv_position.unwrap_or(reported) + v * dt;
+                let p =
+                    self.csv_position.unwrap_or(reported) + v * self.control.load_factor(dt) * dt;
                 self.csv_position = Some(p);
                 p
             }

@@ -2,13 +2,15 @@
 //! plant as the simulated axis, and helpers that put simulated drives on an in-memory bus
 //! ([`simulated_backend`]) or behind an slcan pseudo-terminal ([`serve_on_slcan`]).
 
+pub mod control;
 mod dictionary;
 pub mod drive;
 pub mod od;
 mod profile;
 mod touch_probe;
 
-pub use drive::{Injection, SimCia402Drive, SimDriveConfig, SimDriveControl};
+pub use control::SimDriveControl;
+pub use drive::{Injection, SimCia402Drive, SimDriveConfig};
 pub use touch_probe::ProbeInput;
 
 use klar_drivers::can::CanError;

@@ -1,13 +1,14 @@
 //! The simulated spindle motor behind a VFD: speed ramps at a fixed acceleration toward
 //! the commanded speed, so waiting for at-speed takes real (simulated) time.
 //!
-//! The motor also carries an incremental encoder with an index, and feels the cut: while
-//! the tool cuts a chip of cross-section `A` mm², its speed sinks below the ramped speed by
-//! the fraction `load_droop · A` (at most half), reached with the first-order time
-//! constant `load_time_constant` (and recovered the same way when the tool leaves the cut).
+//! The motor also carries an incremental encoder with an index, and feels the cut
+//! ([`LoadDip`] with `load_droop` and `load_time_constant`): under a chip of cross-section
+//! `A` mm² its speed sinks below the ramped speed by `load_droop · A` (at most half).
 //! The shaft angle is the integral of that speed; the encoder reports it in whole counts.
 
 use klar_motion::{AxisFault, BackendError, SpindleBackend, SpindleFeedback};
+
+use crate::load::LoadDip;
 
 /// Parameters of a simulated spindle.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -54,10 +55,8 @@ pub struct SpindleModel {
     fault: Option<u16>,
     /// The shaft angle, degrees, unwrapped (0 at the index).
     angle: f64,
-    /// Chip cross-section under cut, mm².
-    load: f64,
-    /// Present speed dip as a fraction of the ramped speed.
-    dip: f64,
+    /// The speed dip under cut.
+    load: LoadDip,
 }
 
 impl SpindleModel {
@@ -69,8 +68,7 @@ impl SpindleModel {
             rpm: 0.0,
             fault: None,
             angle: 0.0,
-            load: 0.0,
-            dip: 0.0,
+            load: LoadDip::new(params.load_droop, params.load_time_constant),
         }
     }
 
@@ -99,7 +97,7 @@ impl SpindleModel {
 
     /// The present speed, rpm, signed (under load: below the ramped speed by the dip).
     pub fn rpm(&self) -> f64 {
-        self.rpm * (1.0 - self.dip)
+        self.rpm * self.load.factor()
     }
 
     /// The true shaft angle, degrees, unwrapped.
@@ -116,11 +114,7 @@ impl SpindleModel {
     /// Sets the chip cross-section under cut, mm² (0 out of the cut; non-numbers and
     /// negative values count as 0).
     pub fn set_load(&mut self, section_mm2: f64) {
-        self.load = if section_mm2.is_finite() {
-            section_mm2.max(0.0)
-        } else {
-            0.0
-        };
+        self.load.set_load(section_mm2);
     }
 
     /// The active fault code.
@@ -163,14 +157,7 @@ impl SpindleModel {
         } else {
             self.rpm + step.copysign(diff)
         };
-        let goal = (self.params.load_droop * self.load).clamp(0.0, 0.5);
-        let tau = self.params.load_time_constant;
-        let share = if tau > 0.0 {
-            1.0 - (-dt / tau).exp()
-        } else {
-            1.0
-        };
-        self.dip += (goal - self.dip) * share;
+        self.load.advance(dt);
         // rpm → degrees per second: · 360 / 60; the mean speed over the step.
         self.angle += 0.5 * (before + self.rpm()) * 6.0 * dt;
     }
