@@ -38,6 +38,7 @@ pub mod path;
 mod pool_tests;
 mod run;
 mod scan;
+mod search;
 pub mod smooth;
 pub mod speed;
 #[cfg(test)]

@@ -18,7 +18,8 @@
 //! The candidate actions are ramps ([`Ramp`]) towards a speed, best first:
 //! 1. *go*: the ramp towards the speed limit (or the feed hold's zero) of the current piece;
 //! 2. the ramp towards the highest speed, between a binding limit and the go target, whose
-//!    result is safe (found by bisection): it rides the braking curve in front of a limit.
+//!    result is safe (found by bisection, narrowed by probes: `search`): it rides the
+//!    braking curve in front of a limit.
 //!    Binding limits are tried worst first: those the state misses, those the go ramp
 //!    would miss; then, with a deceleration, the ramp that eases it at once with the
 //!    current jerk (the way to come to rest without reversing that the check assumes); then
@@ -46,6 +47,7 @@
 //! most speed after the period. Braking, the checks let the ramp switch to the higher
 //! acceleration of lower speeds at fixed knees of the grip ([`brake_distance`]).
 
+use super::search::highest_safe;
 use super::through::{CROSSING_SLACK, leaves_below, passes_under};
 use super::verdicts::Verdicts;
 use crate::limits::Grip;
@@ -134,9 +136,6 @@ impl Default for Window {
 /// whose result is judged safe again, with room for rounding and for limits that follow
 /// each other closer than one period travels (dense CAM code).
 pub(super) const JUDGE: f64 = 0.98;
-
-/// Bisection steps for the constant-jerk action.
-const BISECTION_STEPS: usize = 20;
 
 /// Slack for rounding: relative, when comparing an acceleration with a limit; absolute
 /// (mm/s), for the speed left when a deceleration is eased.
@@ -803,21 +802,12 @@ pub fn advance_with(x: &Motion, target: f64, w: &Window, dt: f64, scratch: &mut 
         if low >= hi {
             return brake;
         }
-        let (mut lo, mut hi) = (low, hi);
-        let mut best = brake;
-        for _ in 0..BISECTION_STEPS {
-            let mid = 0.5 * (lo + hi);
-            // Above the speed the state reaches anyway the grip of `mid` applies.
-            let grip = w.grip.at(mid.max(peak_speed(x, jerk)));
-            let trial = ramp_step(x, mid, accel.min(grip), jerk, dt);
-            if verdicts.check(&trial, w) {
-                lo = mid;
-                best = trial;
-            } else {
-                hi = mid;
-            }
-        }
-        return best;
+        // Above the speed the state reaches anyway the grip of the target applies.
+        let trial = |u: f64| {
+            let grip = w.grip.at(u.max(peak_speed(x, jerk)));
+            ramp_step(x, u, accel.min(grip), jerk, dt)
+        };
+        return highest_safe(low, hi, brake, trial, w, verdicts);
     }
     // No ramp keeps every limit: the state is off a braking curve, by rounding, or because it
     // passes limits the backward pass settled for arriving without acceleration while it

@@ -36,6 +36,12 @@ impl Verdicts {
         self.seen.clear();
     }
 
+    /// How many states were judged since the last [`Verdicts::clear`].
+    #[cfg(test)]
+    pub(super) fn len(&self) -> usize {
+        self.seen.len()
+    }
+
     /// [`speed::check`] of `x` in `w`, judged only the first time `x` is seen since the
     /// last [`Verdicts::clear`] (the window must not have changed in between).
     pub(super) fn check(&mut self, x: &Motion, w: &Window) -> bool {
