@@ -94,17 +94,20 @@ fn xyz(p: &Pose) -> [f64; 3] {
     [p[X], p[Y], p[Z]]
 }
 
-/// Runs `text` with measured probing, answering each probing move with `answer`; returns
-/// the ops, the requests and the interpreter (for its Q parameters), or the diagnostic.
-fn run(
-    text: &str,
-    mut answer: impl FnMut(&ProbeRequest) -> ProbeAnswer,
-) -> (
-    Vec<Op>,
-    Vec<(ProbeRequest, usize)>,
-    Interpreter,
-    Option<String>,
-) {
+/// What a run with measured probing gave.
+struct Outcome {
+    /// The ops handed out.
+    ops: Vec<Op>,
+    /// Each probing move asked for, with the number of ops handed out before it.
+    asked: Vec<(ProbeRequest, usize)>,
+    /// The interpreter (for its Q parameters).
+    interp: Interpreter,
+    /// The diagnostic that ended the program, if any.
+    error: Option<String>,
+}
+
+/// Runs `text` with measured probing, answering each probing move with `answer`.
+fn run(text: &str, mut answer: impl FnMut(&ProbeRequest) -> ProbeAnswer) -> Outcome {
     let mut interp = Interpreter::from_source("m.h", text, start())
         .with_probe(ProbeData::default(), Box::new(WrongModel))
         .with_measured_probing(ProbeData::default());
@@ -128,12 +131,22 @@ fn run(
         }
         assert!(asked.len() < 100, "the cycle keeps asking");
     }
-    (ops, asked, interp, error)
+    Outcome {
+        ops,
+        asked,
+        interp,
+        error,
+    }
 }
 
 #[test]
 fn cycle_412_takes_the_measured_touch_points_not_the_model() {
-    let (ops, asked, interp, error) = run(PROGRAM, bore_answer);
+    let Outcome {
+        ops,
+        asked,
+        interp,
+        error,
+    } = run(PROGRAM, bore_answer);
     assert_eq!(error, None);
     assert_eq!(asked.len(), 4, "four touch points, one wait each");
     // least squares through four points on one circle: that circle exactly
@@ -198,7 +211,9 @@ fn cycle_412_takes_the_measured_touch_points_not_the_model() {
 #[test]
 fn a_probing_move_without_a_trigger_ends_in_touch_point_inaccessible() {
     let mut n = 0;
-    let (ops, asked, _, error) = run(PROGRAM, |r| {
+    let Outcome {
+        ops, asked, error, ..
+    } = run(PROGRAM, |r| {
         n += 1;
         if n == 2 {
             // nothing found: the axes ran the whole probing distance and stand at its end
