@@ -234,3 +234,50 @@ fn a_probing_move_without_a_trigger_ends_in_touch_point_inaccessible() {
     // no move after the unanswered touch: the program stops where the axes stand
     assert_eq!(ops.len(), asked[1].1);
 }
+
+#[test]
+fn a_tnc_iso_probing_cycle_is_refused_before_it_moves_on_a_measuring_machine() {
+    let iso = "%M G71 *
+N10 G00 G40 G90 X-25 Y-10 Z+40 *
+N20 G412 PRESET INSIDE CIRCLE
+    Q321=-25   ;CENTER IN 1ST AXIS
+    Q322=-10   ;CENTER IN 2ND AXIS
+    Q262=+24   ;NOMINAL DIAMETER
+    Q325=+0    ;STARTING ANGLE
+    Q247=+90   ;STEPPING ANGLE
+    Q261=-10   ;MEASURING HEIGHT
+    Q320=+5    ;SET-UP CLEARANCE
+    Q260=+20   ;CLEARANCE HEIGHT
+    Q301=+0    ;MOVE TO CLEARANCE
+    Q305=+0    ;NUMBER IN TABLE
+    Q331=+0    ;DATUM
+    Q332=+0    ;DATUM
+    Q303=+1    ;MEAS. VALUE TRANSFER
+    Q381=+0    ;PROBE IN TS AXIS
+    Q423=+4    ;NO. OF PROBE POINTS
+    Q365=+1    ;TYPE OF TRAVERSE *
+N30 G00 X+0 Y+0 Z+50 *
+N99999 %M G71 *
+";
+    let interp =
+        Interpreter::from_source("m.i", iso, start()).with_measured_probing(ProbeData::default());
+    let mut moves = Vec::new();
+    let mut error = None;
+    for item in interp {
+        match item {
+            Ok(op) => {
+                if let OpKind::Line { to, .. } = op.kind {
+                    moves.push(xyz(&to));
+                }
+            }
+            Err(d) => {
+                error = Some(d.to_string());
+                break;
+            }
+        }
+    }
+    let e = error.expect("refused");
+    assert!(e.contains("m.i:3:") && e.contains("G412"), "{e}");
+    // only the move of the block before
+    assert_eq!(moves, vec![[-25.0, -10.0, 40.0]]);
+}
