@@ -1,6 +1,8 @@
 //! The machine's I/O: the axis backends a configuration names, addressed by machine axis
 //! index, and the spindle. One [`MachineIo::cycle`] is one servo cycle for every backend.
 
+mod touch;
+
 use crate::config::{BackendConfig, MachineConfig, SimSpindleConfig, SpindleBackendConfig};
 use crate::runtime::AxisStart;
 use klar_drivers::can::memory::MemoryBus;
@@ -188,9 +190,18 @@ pub struct MachineIo {
     spindle: Option<Spindle>,
     /// The simulated axes (for fault injection and inspection), if any.
     sim: Option<crate::faults::SimAxes>,
+    /// The probe inputs of simulated CiA 402 drives, by machine axis.
+    probe_inputs: SimInputs,
     /// Simulated devices and buses running beside the backends (kept alive, dropped last).
     _companions: Vec<Box<dyn Any>>,
 }
+
+/// The probe inputs of simulated CiA 402 drives: machine axis and the drive's controls.
+type SimInputs = Vec<(usize, klar_sim::cia402::SimDriveControl)>;
+
+/// An opened CANopen bus: its backend, what must stay alive beside it, and the probe inputs
+/// of its simulated drives.
+type OpenedBus = (Cia402Backend, Vec<Box<dyn Any>>, SimInputs);
 
 fn sim_spindle_params(max_rpm: f64, sim: &SimSpindleConfig) -> SpindleParams {
     SpindleParams {
@@ -251,7 +262,7 @@ fn open_canopen(
     network: &CanOpenConfig,
     group: CanGroup,
     period: f64,
-) -> Result<(Cia402Backend, Vec<Box<dyn Any>>), MachineError> {
+) -> Result<OpenedBus, MachineError> {
     let what = format!("CANopen bus {name}");
     let mut letters: Vec<(u8, String)> = group
         .drives
@@ -266,19 +277,22 @@ fn open_canopen(
     config.drives = group.drives;
     config.spindle = group.spindle;
     let mut sim_drives = Vec::new();
+    let mut inputs = Vec::new();
     if matches!(
         config.bus,
         BusConfig::Sim { .. } | BusConfig::SimSlcan { .. }
     ) {
-        for (d, (plant, start)) in config.drives.iter().zip(group.plants) {
+        for ((d, (plant, start)), &axis) in config.drives.iter().zip(group.plants).zip(&group.axes)
+        {
             let mut plant = plant;
             plant.counts_per_unit = d.counts_per_unit.abs();
-            let (drive, _control) = SimCia402Drive::new(SimDriveConfig {
+            let (drive, control) = SimCia402Drive::new(SimDriveConfig {
                 node: d.node,
                 plant,
                 start_position: start,
             });
             sim_drives.push(drive);
+            inputs.push((axis, control));
         }
         if let Some(s) = &config.spindle {
             let (drive, _control) = SimCia402Drive::new(SimDriveConfig {
@@ -313,7 +327,7 @@ fn open_canopen(
         _ => Cia402Backend::open(&config, period),
     }
     .map_err(|e| open_err(what, &name_axes(&e.to_string(), &letters)))?;
-    Ok((backend, companions))
+    Ok((backend, companions, inputs))
 }
 
 /// Where the axes of `config` stand, read from the drives that measure their own position
@@ -339,6 +353,7 @@ impl MachineIo {
         let period = config.servo_period;
         let mut slots = Vec::new();
         let mut companions: Vec<Box<dyn Any>> = Vec::new();
+        let mut probe_inputs = Vec::new();
         let mut sim_axes = Vec::new();
         let mut sim_index = Vec::new();
         let mut can: BTreeMap<String, CanGroup> = BTreeMap::new();
@@ -448,8 +463,9 @@ impl MachineIo {
             };
             let axes = group.axes.clone();
             let has_spindle = group.spindle.is_some();
-            let (backend, keep) = open_canopen(&name, network, group, period)?;
+            let (backend, keep, inputs) = open_canopen(&name, network, group, period)?;
             companions.extend(keep);
+            probe_inputs.extend(inputs);
             if has_spindle && let Some(sp) = backend.spindle() {
                 can_spindle = Some(Box::new(sp));
             }
@@ -537,6 +553,7 @@ impl MachineIo {
             slot_feedback: Vec::with_capacity(n),
             spindle,
             sim,
+            probe_inputs,
             _companions: companions,
         };
         let letters: Vec<_> = config.axes.iter().map(|a| a.letter).collect();

@@ -112,6 +112,8 @@ pub struct ProbeRequest {
     pub to: [f64; 3],
     /// Probing feed, mm/min.
     pub feed: f64,
+    /// The stylus ball's radius the cycle works with, mm (for a simulated part).
+    pub radius: f64,
 }
 
 /// What the machine measured on a [`ProbeRequest`].

@@ -369,6 +369,7 @@ impl Machine {
         out: &mut VecDeque<Op>,
     ) -> Result<P3, ExecError> {
         let (m_start, m_end) = m;
+        let radius = self.ball();
         let stop = self.probe.data.stop;
         if let Some(s) = &stop {
             self.overrun(s, m_start, m_end, m_start, f64::INFINITY, run)?;
@@ -381,6 +382,7 @@ impl Machine {
                     from: m_start,
                     to: m_end,
                     feed,
+                    radius,
                 });
             }
             return Err(perr(ProbeError::Pending(run.cycle)));

@@ -32,6 +32,7 @@ mod cruise;
 mod deep;
 mod drops;
 mod move_hold;
+mod outside;
 pub mod path;
 #[cfg(test)]
 mod pool_tests;
