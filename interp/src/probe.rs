@@ -1,8 +1,10 @@
 //! The touch probe as the interpreter asks it: "move the stylus ball from here toward there;
 //! where does it touch the workpiece?". The interpreter stays pure: whoever runs a program
 //! answers the question — klar's test run and its simulated machine from a simulated
-//! workpiece placed in the machine file. Touch-probe cycles (`TCH PROBE`) are refused on an
-//! interpreter that was given no probe.
+//! workpiece placed in the machine file. On a machine that measures touch points with its
+//! drives the interpreter asks no model: it waits for each probing move to be run and
+//! measured (`ProbeRequest`, `ProbeAnswer`; see `tnc::probe_wait`). Touch-probe cycles
+//! (`TCH PROBE`) are refused on an interpreter that was given neither.
 
 use crate::tnc::exec::Blank;
 

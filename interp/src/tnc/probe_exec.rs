@@ -35,6 +35,9 @@
 //!   the stylus may deflect is refused before the move ("probing feed too high"), as is a
 //!   touch that comes before the probe can have reached its probing feed;
 //!
+//! - measured probing ([`super::probe_wait`]): the machine runs each probing move, stops it at
+//!   the trigger and answers with the latched position; the cycle waits for it.
+//!
 //! Not modelled: the tilted working plane (probing is refused in it). Without a
 //! [`ProbeStop`] the axes stop on the trigger point, which the interpreter knows before the
 //! move. Q303=0 (the datum table): see [`super::probe_ref`].
