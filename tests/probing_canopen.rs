@@ -7,16 +7,9 @@
 
 mod common;
 
+use common::probing::machine as load;
 use klar::config::MachineConfig;
 use klar::runtime::RunReport;
-use std::path::Path;
-
-fn load(name: &str) -> MachineConfig {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("machines")
-        .join(name);
-    MachineConfig::load(&p).expect("machine loads")
-}
 
 /// The encoders count 10 000 per mm: a latched position lies within half a count of the
 /// trigger, and a result from several of them within a count.

@@ -5,6 +5,7 @@
 
 pub mod mill5;
 pub mod peers;
+pub mod probing;
 pub mod threads;
 pub mod vfd_peer;
 
