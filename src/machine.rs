@@ -1,6 +1,8 @@
 //! The machine's I/O: the axis backends a configuration names, addressed by machine axis
 //! index, and the spindle. One [`MachineIo::cycle`] is one servo cycle for every backend.
 
+mod touch;
+
 use crate::config::{BackendConfig, MachineConfig, SimSpindleConfig, SpindleBackendConfig};
 use crate::runtime::AxisStart;
 use klar_drivers::modbus::limits as modbus_limits;
@@ -188,9 +190,14 @@ pub struct MachineIo {
     spindle: Option<Spindle>,
     /// The simulated axes (for fault injection and inspection), if any.
     sim: Option<crate::faults::SimAxes>,
+    /// The probe inputs of simulated CiA 402 drives, by machine axis.
+    probe_inputs: SimInputs,
     /// Simulated devices and buses running beside the backends (kept alive, dropped last).
     _companions: Vec<Box<dyn Any>>,
 }
+
+/// The probe inputs of simulated CiA 402 drives: machine axis and the drive's controls.
+type SimInputs = Vec<(usize, klar_sim::cia402::SimDriveControl)>;
 
 fn sim_spindle_params(max_rpm: f64, sim: &SimSpindleConfig) -> SpindleParams {
     SpindleParams {
@@ -234,6 +241,7 @@ impl MachineIo {
         let period = config.servo_period;
         let mut slots = Vec::new();
         let mut companions: Vec<Box<dyn Any>> = Vec::new();
+        let mut probe_inputs = Vec::new();
         let mut sim_axes = Vec::new();
         let mut sim_index = Vec::new();
         let mut can: BTreeMap<String, CanGroup> = BTreeMap::new();
@@ -345,8 +353,10 @@ impl MachineIo {
             };
             let axes = group.axes.clone();
             let has_spindle = group.spindle.is_some();
-            let (backend, keep, control) = open_canopen(&name, network, group, period)?;
-            companions.extend(keep);
+            let opened = open_canopen(&name, network, group, period)?;
+            let (backend, control) = (opened.backend, opened.spindle);
+            companions.extend(opened.companions);
+            probe_inputs.extend(opened.probe_inputs);
             if has_spindle && let Some(sp) = backend.spindle() {
                 can_spindle = Some(loaded::with_sim_load(Box::new(sp), control));
             }
@@ -434,6 +444,7 @@ impl MachineIo {
             slot_feedback: Vec::with_capacity(n),
             spindle,
             sim,
+            probe_inputs,
             _companions: companions,
         };
         let letters: Vec<_> = config.axes.iter().map(|a| a.letter).collect();

@@ -34,6 +34,7 @@ mod log;
 mod operator;
 mod pass_hold;
 mod per_rev;
+mod probing;
 mod reader;
 mod settle;
 mod spindle;
@@ -237,6 +238,8 @@ pub struct Run<'a, 'w> {
     pass_hold: Option<pass_hold::PassHold>,
     /// Feed per revolution following the measured spindle speed.
     warp: per_rev::RevWarp,
+    /// A probing move the run measures itself (`[probe] latch`), while one is due.
+    probing: Option<probing::Probing>,
 }
 
 impl Run<'_, '_> {
@@ -519,9 +522,13 @@ impl<'a, 'w> Run<'a, 'w> {
                 fail(MachineError::Open { what, message }.into(), &report)
             })?;
         let start = command.kinematics().to_program(&at);
-        let interp = config
+        let mut interp = config
             .open_program(path, start)
             .map_err(|d| fail(RunError::Program(d), &report))?;
+        if config.probe.as_ref().is_some_and(|p| p.latch) {
+            // touch points from the drives' latches (the test run above used the model)
+            interp = interp.with_measured_probing(config.probe_data());
+        }
         let max_rpm = config.spindle.as_ref().map_or(0.0, |s| s.max_rpm);
         let ops = OpStream::new(interp, start, max_rpm, path);
         let checks = OpChecks {
@@ -650,6 +657,7 @@ impl<'a, 'w> Run<'a, 'w> {
             warp: per_rev::RevWarp::new(),
             log,
             deferred: None,
+            probing: None,
         };
         // Start-up: the planner fills its look-ahead before the first cycle, waiting for
         // the reader as long as it takes.
@@ -681,6 +689,15 @@ impl<'a, 'w> Run<'a, 'w> {
                 Err(e) => Err(e),
             };
         }
+        if self.probe_moving() {
+            return match self.probe_step() {
+                Ok(()) => Ok(true),
+                Err(
+                    e @ (RunError::Fault { .. } | RunError::Backend(_) | RunError::Setpoint { .. }),
+                ) => Err(self.quick_stop(e)),
+                Err(e) => Err(e),
+            };
+        }
         let wait = !self.report.realtime;
         let mut fed = self.feed_planner(wait);
         // A stop waiting for the retract after a geared pass ends once that hold is in force.
@@ -698,6 +715,14 @@ impl<'a, 'w> Run<'a, 'w> {
             // before it goes on, which is not the end of the program. Each round takes an op
             // or ends the input.
             if !fed {
+                if self.probing.is_some() {
+                    // Before a probing move: the machine comes to rest, then the run moves.
+                    if self.planner.drained() {
+                        return self.start_probe_move().map(|()| true);
+                    }
+                    next = self.planner.next_step_starved();
+                    break;
+                }
                 // Starved: the reader has not kept up. The path goes on with what it has,
                 // braking for its end (the planner always can), and the cycle is counted.
                 self.report.starved += 1;
@@ -898,8 +923,21 @@ impl<'a, 'w> Run<'a, 'w> {
     /// when `wait`. Returns false when the planner wants more and the reader has none yet.
     fn feed_planner(&mut self, wait: bool) -> bool {
         while !self.input_done && self.planner.needs_input() {
+            if self.probing.is_some() {
+                // nothing comes before the probing move is measured
+                return false;
+            }
             match self.reader.next(wait) {
                 None => return false,
+                Some(Feed::Probe(request, blank, blocks)) => {
+                    self.blocks = blocks;
+                    if let Err(e) = self.planner.end_in_stop() {
+                        self.stop_reading(RunError::Motion(e));
+                        return true;
+                    }
+                    self.probing = Some(probing::Probing::new(request, blank));
+                    return false;
+                }
                 Some(Feed::Op(op, blocks, basis)) => {
                     self.blocks = blocks;
                     if matches!(

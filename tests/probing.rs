@@ -5,16 +5,12 @@
 
 mod common;
 
+use common::probing::{OFF, ORIGIN, TURN, c400, close, program_text, turn};
+
 use klar::config::MachineConfig;
 use klar_interp::Interpreter;
 use std::path::{Path, PathBuf};
 
-/// Preset 1 of `machines/probing.pr`, machine coordinates.
-const ORIGIN: [f64; 3] = [100.0, 50.0, -60.0];
-/// Where the part really lies off its nominal place.
-const OFF: [f64; 3] = [3.2, -1.7, -0.25];
-/// Its turn about Z, degrees.
-const TURN: f64 = 1.5;
 /// Lengths within 1 µm (the figure asked for), angles within 0.001°.
 const MM: f64 = 1e-3;
 /// The stylus ball's radius (`[probe] radius` of the machine file).
@@ -22,14 +18,7 @@ const BALL: f64 = 2.0;
 const DEG: f64 = 1e-3;
 
 fn machine() -> MachineConfig {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/probing-mill.toml");
-    MachineConfig::load(&p).expect("probing machine loads")
-}
-
-/// `v` turned about Z by `deg`.
-fn turn(v: [f64; 2], deg: f64) -> [f64; 2] {
-    let (s, c) = deg.to_radians().sin_cos();
-    [v[0] * c - v[1] * s, v[0] * s + v[1] * c]
+    common::probing::machine("probing-mill.toml")
 }
 
 /// Program coordinates (preset 1, no basic rotation) of part point `q`.
@@ -44,46 +33,10 @@ fn aligned_of(q: [f64; 2]) -> [f64; 2] {
     [o[0] + q[0], o[1] + q[1]]
 }
 
-const PRELUDE: &str = "BEGIN PGM PROBE MM
-BLK FORM 0.1 Z X-50 Y-40 Z-30
-BLK FORM 0.2 X+50 Y+40 Z+0
-TOOL CALL 1 Z S0
-L Z+50 R0 FMAX
-";
-
-const C400: &str = "TCH PROBE 400 BASIC ROTATION ~
-  Q263=-30 ;1ST POINT 1ST AXIS ~
-  Q264=-40 ;1ST POINT 2ND AXIS ~
-  Q265=+30 ;2ND POINT 1ST AXIS ~
-  Q266=-40 ;2ND POINT 2ND AXIS ~
-  Q272=+1 ;MEASURING AXIS ~
-  Q267=+1 ;TRAVERSE DIRECTION ~
-  Q261=-10 ;MEASURING HEIGHT ~
-  Q320=+5 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q301=+1 ;MOVE TO CLEARANCE ~
-  Q307=+0 ;PRESET ROTATION ANG. ~
-  Q305=+0 ;NUMBER IN TABLE
-";
-
 /// Runs `body` after the prelude on the probing machine and returns the interpreter.
 fn run_body(name: &str, body: &str) -> (Interpreter, PathBuf) {
-    let text = format!("{PRELUDE}{body}M30\nEND PGM PROBE MM\n");
-    let path = common::temp_program(name, &text);
-    let m = machine();
-    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
-    for op in it.by_ref() {
-        op.expect("the program runs");
-    }
+    let (it, _, path) = common::probing::run_body(&machine(), "PROBE", name, body);
     (it, path)
-}
-
-fn close(what: &str, got: f64, want: f64, tol: f64) {
-    eprintln!("{what}: off by {:e}", (got - want).abs());
-    assert!(
-        (got - want).abs() <= tol,
-        "{what}: got {got}, expected {want} (±{tol})"
-    );
 }
 
 /// Preset row 1 after the run: X, Y, Z and ROT.
@@ -104,7 +57,7 @@ fn preset1(it: &Interpreter) -> ([f64; 3], f64) {
 
 #[test]
 fn cycle_400_finds_the_turn_and_writes_it_as_basic_rotation() {
-    let (it, _) = run_body("probe400.h", C400);
+    let (it, _) = run_body("probe400.h", &c400(0));
     close("Q150", it.q(150), TURN, DEG);
     let (xyz, rot) = preset1(&it);
     close("preset ROT", rot, TURN, DEG);
@@ -176,7 +129,7 @@ fn cycles_410_and_411_after_400_find_the_pocket_and_the_outline() {
   Q303=+1 ;MEAS. VALUE TRANSFER ~
   Q381=+0 ;PROBE IN TS AXIS
 ";
-    let (it, _) = run_body("probe410.h", &format!("{C400}{c410}"));
+    let (it, _) = run_body("probe410.h", &format!("{}{c410}", c400(0)));
     let c = aligned_of([20.0, -10.0]);
     close("Q151", it.q(151), c[0], MM);
     close("Q152", it.q(152), c[1], MM);
@@ -204,7 +157,7 @@ fn cycles_410_and_411_after_400_find_the_pocket_and_the_outline() {
   Q303=+1 ;MEAS. VALUE TRANSFER ~
   Q381=+0 ;PROBE IN TS AXIS
 ";
-    let (it, _) = run_body("probe411.h", &format!("{C400}{c411}"));
+    let (it, _) = run_body("probe411.h", &format!("{}{c411}", c400(0)));
     let c = aligned_of([0.0, 0.0]);
     close("Q151", it.q(151), c[0], MM);
     close("Q152", it.q(152), c[1], MM);
@@ -269,7 +222,7 @@ fn probing_a_missing_part_stops_after_the_probing_distance() {
     let body = "TCH PROBE 0.0 REF. PLANE Q10 Z-
 TCH PROBE 0.1 X+150 Y+0 Z+0
 ";
-    let text = format!("{PRELUDE}{body}M30\nEND PGM PROBE MM\n");
+    let text = program_text("PROBE", body);
     let path = common::temp_program("probe_missing.h", &text);
     let m = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/probing-mill.toml");
     let (ok, out, err) =
@@ -341,7 +294,7 @@ TCH PROBE 1.2 X+60 Y+0 Z-10
 /// Runs `body` after the prelude on `m` and asserts that the first error is at `line` and
 /// says `says`.
 fn refused_at(m: &MachineConfig, name: &str, body: &str, line: u32, says: &str) {
-    let path = common::temp_program(name, &format!("{PRELUDE}{body}M30\nEND PGM PROBE MM\n"));
+    let path = common::temp_program(name, &program_text("PROBE", body));
     let mut it = m.open_program(&path, m.start_pose()).expect("opens");
     let err = it.find_map(Result::err).expect("refused");
     assert!(err.message.contains(says), "{name}: {}", err.message);
@@ -352,7 +305,13 @@ fn refused_at(m: &MachineConfig, name: &str, body: &str, line: u32, says: &str) 
 fn probing_errors_name_their_cause_at_their_block() {
     // a machine without a probe
     let mill = MachineConfig::builtin_mill();
-    refused_at(&mill, "probe_nomachine.h", C400, 6, "needs a touch probe");
+    refused_at(
+        &mill,
+        "probe_nomachine.h",
+        &c400(0),
+        6,
+        "needs a touch probe",
+    );
     let m = machine();
     refused_at(
         &m,
@@ -421,7 +380,7 @@ TCH PROBE 427 MEASURE COORDINATE ~
   Q267=-1 ;TRAVERSE DIRECTION ~
   Q260=+20 ;CLEARANCE HEIGHT
 ";
-    let (it, _) = run_body("probe424.h", &format!("{C400}{c424}"));
+    let (it, _) = run_body("probe424.h", &format!("{}{c424}", c400(0)));
     let c = aligned_of([0.0, 0.0]);
     close("Q154", it.q(154), 100.0, MM);
     close("Q164", it.q(164), -0.5, MM);
@@ -479,7 +438,7 @@ CYCL DEF 247 DATUM SETTING ~
   Q339=+2 ;DATUM NUMBER
 L X+10 Y-5 Z+1 FMAX
 ";
-    let text = format!("{PRELUDE}{body}M30\nEND PGM PROBE MM\n");
+    let text = program_text("PROBE", body);
     let path = common::temp_program("probe_row2.h", &text);
     let m = machine();
     let mut it = m.open_program(&path, m.start_pose()).expect("opens");

@@ -8,20 +8,19 @@
 
 mod common;
 
+use common::probing::ORIGIN;
+
 use klar::config::MachineConfig;
 use klar_interp::Interpreter;
 use std::path::Path;
 
-/// Preset 1 of `machines/probing.pr`, machine coordinates.
-const ORIGIN: [f64; 3] = [100.0, 50.0, -60.0];
 /// Trigger delay given to the probe here, s.
 const DELAY: f64 = 0.004;
 /// Servo period of the machine file, s.
 const DT: f64 = 0.001;
 
 fn machine(feed: f64, overtravel: f64) -> MachineConfig {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/probing-mill.toml");
-    let mut m = MachineConfig::load(&p).expect("probing machine loads");
+    let mut m = common::probing::machine("probing-mill.toml");
     let probe = m.probe.as_mut().expect("[probe]");
     probe.feed = feed;
     probe.trigger_delay = Some(DELAY);

@@ -6,28 +6,19 @@
 
 mod common;
 
+use common::probing::{OFF, TURN, c400, close, program_text, turn};
+
 use klar::config::MachineConfig;
 use klar_interp::{AxisLetter, Interpreter, Op, OpKind};
 use std::path::Path;
 
-/// Where the part really lies off its nominal place (program X, Y).
-const OFF: [f64; 2] = [3.2, -1.7];
-/// Its turn about Z, degrees.
-const TURN: f64 = 1.5;
 /// The bore of the machine file: nominal centre.
 const BORE: [f64; 2] = [0.0, 25.0];
 /// The simulated part and probe are exact: results agree to far below a nanometre.
 const EXACT: f64 = 1e-9;
 
 fn machine() -> MachineConfig {
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("machines/probing-rotary.toml");
-    MachineConfig::load(&p).expect("rotary probing machine loads")
-}
-
-/// `v` turned about Z by `deg`.
-fn turn(v: [f64; 2], deg: f64) -> [f64; 2] {
-    let (s, c) = deg.to_radians().sin_cos();
-    [v[0] * c - v[1] * s, v[0] * s + v[1] * c]
+    common::probing::machine("probing-rotary.toml")
 }
 
 /// Program coordinates of part point `q` with the table at C = `c`.
@@ -35,13 +26,6 @@ fn program_of(q: [f64; 2], c: f64) -> [f64; 2] {
     let t = turn(q, TURN);
     turn([OFF[0] + t[0], OFF[1] + t[1]], -c)
 }
-
-const PRELUDE: &str = "BEGIN PGM ROT MM
-BLK FORM 0.1 Z X-50 Y-40 Z-30
-BLK FORM 0.2 X+50 Y+40 Z+0
-TOOL CALL 1 Z S0
-L Z+50 R0 FMAX
-";
 
 const C403: &str = "TCH PROBE 403 ROT IN ROTARY AXIS ~
   Q263=-30 ;1ST POINT 1ST AXIS ~
@@ -59,21 +43,6 @@ const C403: &str = "TCH PROBE 403 ROT IN ROTARY AXIS ~
   Q305=+0 ;NUMBER IN TABLE ~
   Q303=+1 ;MEAS. VALUE TRANSFER ~
   Q380=+0 ;REFERENCE ANGLE
-";
-
-const C400: &str = "TCH PROBE 400 BASIC ROTATION ~
-  Q263=-30 ;1ST POINT 1ST AXIS ~
-  Q264=-40 ;1ST POINT 2ND AXIS ~
-  Q265=+30 ;2ND POINT 1ST AXIS ~
-  Q266=-40 ;2ND POINT 2ND AXIS ~
-  Q272=+1 ;MEASURING AXIS ~
-  Q267=+1 ;TRAVERSE DIRECTION ~
-  Q261=-10 ;MEASURING HEIGHT ~
-  Q320=+5 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q301=+1 ;MOVE TO CLEARANCE ~
-  Q307=+0 ;PRESET ROTATION ANG. ~
-  Q305=+1 ;NUMBER IN TABLE
 ";
 
 const C405: &str = "TCH PROBE 405 ROT IN C AXIS ~
@@ -112,14 +81,7 @@ const C412: &str = "TCH PROBE 412 PRESET INSIDE CIRCLE ~
 
 /// Runs `body` after the prelude on the rotary machine: the interpreter and every op.
 fn run_body(name: &str, body: &str) -> (Interpreter, Vec<Op>) {
-    let text = format!("{PRELUDE}{body}M30\nEND PGM ROT MM\n");
-    let path = common::temp_program(name, &text);
-    let m = machine();
-    let mut it = m.open_program(&path, m.start_pose()).expect("opens");
-    let ops: Vec<Op> = it
-        .by_ref()
-        .map(|op| op.expect("the program runs"))
-        .collect();
+    let (it, ops, _) = common::probing::run_body(&machine(), "ROT", name, body);
     (it, ops)
 }
 
@@ -135,17 +97,9 @@ fn c_turns(ops: &[Op]) -> Vec<f64> {
         .collect()
 }
 
-fn close(what: &str, got: f64, want: f64, tol: f64) {
-    eprintln!("{what}: off by {:e}", (got - want).abs());
-    assert!(
-        (got - want).abs() <= tol,
-        "{what}: got {got}, expected {want} (±{tol})"
-    );
-}
-
 #[test]
 fn cycle_403_turns_the_table_so_that_400_then_finds_the_edge_square() {
-    let (it, ops) = run_body("probe403.h", &format!("{C403}{C400}{C412}"));
+    let (it, ops) = run_body("probe403.h", &format!("{C403}{}{C412}", c400(1)));
     // Q150 is 400's, after the turn: the edge lies along X
     close("Q150 of 400 after 403", it.q(150), 0.0, EXACT);
     let turns = c_turns(&ops);
@@ -204,7 +158,7 @@ fn rotary_cycles_refuse_what_they_cannot_do() {
         ("bad337.h", C403.replace("Q337=+0", "Q337=+2"), "Q337=2"),
         ("bad272.h", C403.replace("Q272=+1", "Q272=+3"), "Q272=3"),
     ] {
-        let text = format!("{PRELUDE}{body}M30\nEND PGM ROT MM\n");
+        let text = program_text("ROT", &body);
         let path = common::temp_program(name, &text);
         let mut it = m.open_program(&path, m.start_pose()).expect("opens");
         let err = it

@@ -363,6 +363,28 @@ impl Interpreter {
         self
     }
 
+    /// Measured probing: `TCH PROBE` cycles take each touch point from the machine (the
+    /// drives' touch-probe latches) instead of asking a probe model. At each probing move the
+    /// interpreter hands out the ops before it and then yields `None` with
+    /// [`Interpreter::probe_request`] set: the machine runs the probing move itself and
+    /// [`Interpreter::answer_probe`] lets the program go on from where the axes stopped.
+    /// `data` as for [`Interpreter::with_probe`]. Klartext programs (TNC ISO `G4nn` are
+    /// refused on such a machine).
+    pub fn with_measured_probing(mut self, data: crate::probe::ProbeData) -> Self {
+        self.target().set_measured_probing(data);
+        self
+    }
+
+    /// The probing move the interpreter waits for the machine to measure, if any.
+    pub fn probe_request(&self) -> Option<crate::probe::ProbeRequest> {
+        self.target_ref().probe_request()
+    }
+
+    /// The machine's answer to [`Interpreter::probe_request`]: the program goes on.
+    pub fn answer_probe(&mut self, answer: crate::probe::ProbeAnswer) {
+        self.target().answer_probe(answer);
+    }
+
     /// The value of Q parameter `n` now (0 when never set): the results of touch-probe cycles
     /// (Q150 and up) for whoever runs the program.
     pub fn q(&self, n: u32) -> f64 {
@@ -784,6 +806,10 @@ impl Iterator for Interpreter {
             if let Some(d) = self.pending_error.take() {
                 self.queue.clear();
                 return Some(Err(d));
+            }
+            if self.machine.probe_request().is_some() {
+                // waiting for the machine to measure a probing move
+                return None;
             }
             if self.finished || self.done {
                 // nothing can change the held element any more

@@ -167,6 +167,20 @@ impl Interpreter {
                 self.jump(&label, mode)
             }
             Flow::CallPgm(written) => self.call_program(&written),
+            Flow::ProbeWait => {
+                // the block runs again once the machine has measured the probing move; the
+                // ops before it and the move itself leave now
+                self.blocks = self.blocks.saturating_sub(1);
+                self.machine.release();
+                let at = self.current;
+                match self.units.last_mut() {
+                    Some(u) => u
+                        .reader
+                        .seek(at)
+                        .map_err(|e| ProgramError::Io(e.to_string())),
+                    None => Ok(()),
+                }
+            }
             Flow::Contours(labels) => {
                 let collected = self.collect_contours(&labels);
                 self.machine.finish_contours(collected, &mut self.queue)

@@ -34,7 +34,7 @@ pub use op::{
     ApproachShape, AxisLetter, CompSide, CornerRule, Feed, Op, OpKind, Plane, Pose, PresetWrite,
     ProbeResult, SourceLoc, SplineAxis,
 };
-pub use probe::{Probe, ProbeData, ProbeStop};
+pub use probe::{Probe, ProbeAnswer, ProbeData, ProbeRequest, ProbeStop};
 pub use source::MAX_BLOCK_BYTES;
 pub use tnc::contour::SPLINE_START_TOLERANCE;
 pub use tnc::cycle_table::{DatumTable, DatumTableError};

@@ -1,8 +1,10 @@
 //! The touch probe as the interpreter asks it: "move the stylus ball from here toward there;
 //! where does it touch the workpiece?". The interpreter stays pure: whoever runs a program
 //! answers the question — klar's test run and its simulated machine from a simulated
-//! workpiece placed in the machine file. Touch-probe cycles (`TCH PROBE`) are refused on an
-//! interpreter that was given no probe.
+//! workpiece placed in the machine file. On a machine that measures touch points with its
+//! drives the interpreter asks no model: it waits for each probing move to be run and
+//! measured (`ProbeRequest`, `ProbeAnswer`; see `tnc::probe_wait`). Touch-probe cycles
+//! (`TCH PROBE`) are refused on an interpreter that was given neither.
 
 use crate::tnc::exec::Blank;
 
@@ -100,6 +102,32 @@ impl ProbeStop {
     }
 }
 
+/// A probing move the machine runs and measures itself, on a machine whose probe signal
+/// goes to the drives' touch-probe inputs: the ball centre moves from `from` toward `to`
+/// (machine X, Y, Z, mm: the whole probing distance) at `feed` (mm/min), the axes stop
+/// soon after the probe triggers, and the machine answers with a [`ProbeAnswer`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProbeRequest {
+    /// Where the probing move starts (machine X, Y, Z of the ball centre), mm.
+    pub from: [f64; 3],
+    /// Where it ends when the probe finds nothing: the probing distance away, mm.
+    pub to: [f64; 3],
+    /// Probing feed, mm/min.
+    pub feed: f64,
+    /// The stylus ball's radius the cycle works with, mm (for a simulated part).
+    pub radius: f64,
+}
+
+/// What the machine measured on a [`ProbeRequest`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ProbeAnswer {
+    /// Where the ball centre stood when the probe triggered (the drives' latched
+    /// positions, machine X, Y, Z, mm); `None`: no trigger within the probing distance.
+    pub trigger: Option<[f64; 3]>,
+    /// Where the axes came to rest (machine X, Y, Z, mm).
+    pub stop: [f64; 3],
+}
+
 /// Answers probing moves. Coordinates are machine coordinates in mm (X, Y, Z) of the centre
 /// of the stylus ball, which is the point klar moves when the probe is the active tool.
 pub trait Probe: std::fmt::Debug + Send {
@@ -192,6 +220,10 @@ pub enum ProbeError {
         /// How far it needs to reach the probing feed, mm.
         run_up: f64,
     },
+    /// The probing move is under way on the machine: the cycle goes on once the machine
+    /// has answered ([`ProbeAnswer`]). Never reported as an error.
+    #[error("TCH PROBE {0}: waiting for the probing move to be measured")]
+    Pending(u32),
     /// A cycle number klar does not run.
     #[error("touch-probe cycle {0} not supported yet")]
     Unknown(u32),

@@ -157,6 +157,23 @@ pub trait AxisBackend {
     fn feedback_lag(&self) -> u32 {
         0
     }
+
+    /// Arms the touch-probe latch of `axis`: the next time the probe input switches on, the
+    /// drive stores the position it measures at that instant. Returns false when the axis
+    /// has no such latch (the default).
+    fn arm_touch_probe(&mut self, _axis: usize) -> Result<bool, BackendError> {
+        Ok(false)
+    }
+
+    /// The position `axis` latched since its touch probe was armed, once it has one.
+    fn touch_probe_position(&mut self, _axis: usize) -> Result<Option<f64>, BackendError> {
+        Ok(None)
+    }
+
+    /// Switches the touch-probe latch of `axis` off.
+    fn disarm_touch_probe(&mut self, _axis: usize) -> Result<(), BackendError> {
+        Ok(())
+    }
 }
 
 /// The origin of an axis's fault as the backend knows it.

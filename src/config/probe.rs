@@ -5,7 +5,7 @@
 use super::MachineConfig;
 use super::probe_features::{self, HoleCircleConfig, RidgeConfig, SlotConfig};
 use crate::workpiece::{Bore, Boss, Pocket, SimWorkpiece};
-use klar_interp::{Interpreter, ProbeData, ProbeStop};
+use klar_interp::{AxisLetter, Interpreter, ProbeData, ProbeStop};
 use serde::Deserialize;
 
 /// `[probe]`: the touch probe's data (the TNC's touch-probe table).
@@ -35,6 +35,11 @@ pub struct ProbeConfig {
     /// touch point is refused.
     #[serde(default)]
     pub overtravel: Option<f64>,
+    /// The probe's signal goes to the touch-probe inputs of the X, Y and Z drives (CiA 402):
+    /// a run takes each touch point from their latches, waiting for each probing move
+    /// (`klar check` still answers from `[workpiece]`).
+    #[serde(default)]
+    pub latch: bool,
 }
 
 fn default_radius() -> f64 {
@@ -124,6 +129,11 @@ pub struct WorkpieceConfig {
     /// default the machine origin), mm.
     #[serde(default)]
     pub table_centre: [f64; 2],
+    /// Where the probe inputs of simulated CiA 402 drives find the part, relative to this
+    /// description, X, Y, Z, mm: with `[probe] latch` a run measures the part moved by it,
+    /// `klar check` the part as described (a part that is not where its model says).
+    #[serde(default)]
+    pub actual_shift: [f64; 3],
 }
 
 impl MachineConfig {
@@ -217,6 +227,17 @@ impl MachineConfig {
         })
     }
 
+    /// The part as the probe inputs of simulated drives find it: `[workpiece]` moved by its
+    /// `actual_shift`.
+    pub fn actual_workpiece(&self) -> Option<SimWorkpiece> {
+        let shift = self.workpiece.as_ref()?.actual_shift;
+        let mut w = self.sim_workpiece()?;
+        for (o, d) in w.offset.iter_mut().zip(shift) {
+            *o += d;
+        }
+        Some(w)
+    }
+
     /// `interp` given the simulated probe when the machine has a `[workpiece]`.
     pub(super) fn with_probe(&self, interp: Interpreter) -> Interpreter {
         match self.sim_workpiece() {
@@ -257,6 +278,18 @@ impl MachineConfig {
             {
                 return Err(format!("probe trigger_delay must lie in 0 … 1 s, got {t}"));
             }
+            if p.latch {
+                for l in [AxisLetter::X, AxisLetter::Y, AxisLetter::Z] {
+                    let on_drive = self.axes.iter().any(|a| {
+                        a.letter == l && matches!(a.backend, super::BackendConfig::Canopen(_))
+                    });
+                    if !on_drive {
+                        return Err(format!(
+                            "probe latch needs axis {l} on a CiA 402 drive (backend kind \"canopen\")"
+                        ));
+                    }
+                }
+            }
         }
         if let Some(w) = &self.workpiece {
             let finite = w
@@ -264,6 +297,7 @@ impl MachineConfig {
                 .iter()
                 .chain(&[w.rotation])
                 .chain(&w.table_centre)
+                .chain(&w.actual_shift)
                 .all(|v| v.is_finite() && v.abs() <= 1e6);
             if !finite {
                 return Err("workpiece offset and rotation must be finite numbers".into());

@@ -10,7 +10,7 @@ use klar_drivers::cia402::{BusConfig, CanOpenConfig, Cia402Backend, DriveConfig}
 use klar_sim::cia402::{SimCia402Drive, SimDriveConfig, SimDriveControl, serve_on_slcan};
 use klar_sim::plant::SimAxisParams;
 
-use super::{MachineError, open_err};
+use super::{MachineError, SimInputs, open_err};
 
 /// Axes of one CANopen bus gathered from the machine's axes and spindle.
 #[derive(Default)]
@@ -48,9 +48,17 @@ fn name_axes(message: &str, letters: &[(u8, String)]) -> String {
     }
 }
 
-/// An opened CANopen bus: the backend, what must stay alive beside it, and the handle of
-/// the simulated spindle drive on a simulated bus.
-pub(super) type OpenedBus = (Cia402Backend, Vec<Box<dyn Any>>, Option<SimDriveControl>);
+/// An opened CANopen bus.
+pub(super) struct OpenedBus {
+    /// The bus's axes and spindle.
+    pub(super) backend: Cia402Backend,
+    /// What must stay alive beside the backend (the in-memory bus, the slcan runner).
+    pub(super) companions: Vec<Box<dyn Any>>,
+    /// The handle of the simulated spindle drive, on a simulated bus.
+    pub(super) spindle: Option<SimDriveControl>,
+    /// The probe inputs of the simulated axis drives, by machine axis.
+    pub(super) probe_inputs: SimInputs,
+}
 
 /// Opens a CANopen bus with its drives; returns the backend and what must stay alive.
 pub(super) fn open_canopen(
@@ -74,19 +82,22 @@ pub(super) fn open_canopen(
     config.spindle = group.spindle;
     let mut sim_drives = Vec::new();
     let mut spindle_control = None;
+    let mut probe_inputs = Vec::new();
     if matches!(
         config.bus,
         BusConfig::Sim { .. } | BusConfig::SimSlcan { .. }
     ) {
-        for (d, (plant, start)) in config.drives.iter().zip(group.plants) {
+        for ((d, (plant, start)), &axis) in config.drives.iter().zip(group.plants).zip(&group.axes)
+        {
             let mut plant = plant;
             plant.counts_per_unit = d.counts_per_unit.abs();
-            let (drive, _control) = SimCia402Drive::new(SimDriveConfig {
+            let (drive, control) = SimCia402Drive::new(SimDriveConfig {
                 node: d.node,
                 plant,
                 start_position: start,
             });
             sim_drives.push(drive);
+            probe_inputs.push((axis, control));
         }
         if let Some(s) = &config.spindle {
             let (drive, control) = SimCia402Drive::new(SimDriveConfig {
@@ -123,5 +134,10 @@ pub(super) fn open_canopen(
         _ => Cia402Backend::open(&config, period),
     }
     .map_err(|e| open_err(what, &name_axes(&e.to_string(), &letters)))?;
-    Ok((backend, companions, spindle_control))
+    Ok(OpenedBus {
+        backend,
+        companions,
+        spindle: spindle_control,
+        probe_inputs,
+    })
 }

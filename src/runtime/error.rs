@@ -111,6 +111,9 @@ pub enum RunError {
     /// Writing the trace failed.
     #[error("trace: {0}")]
     Trace(#[from] std::io::Error),
+    /// A probing move the run measures could not be run.
+    #[error("touch probe: {0}")]
+    Probe(String),
 }
 
 /// `; the first: <diagnostic>` when there is one.

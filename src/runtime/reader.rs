@@ -16,7 +16,7 @@
 use super::RunError;
 use super::stream::OpStream;
 use crate::testrun::{check_positioning, check_travel, planner_ops};
-use klar_interp::{AxisLetter, Op};
+use klar_interp::{AxisLetter, Blank, Op, ProbeAnswer, ProbeRequest};
 use std::path::PathBuf;
 use std::sync::mpsc::{Receiver, RecvError, SyncSender, TryRecvError, sync_channel};
 
@@ -33,6 +33,10 @@ pub enum Feed {
     Error(RunError, u64),
     /// The program has ended.
     End(u64),
+    /// The interpreter waits for the machine to run and measure this probing move (every
+    /// op before it came first); the program's BLK FORM for a simulated part. Answer with
+    /// [`Reader::answer_probe`].
+    Probe(ProbeRequest, Option<Blank>, u64),
 }
 
 /// What the reader checks every op against (copies of the run's machine data).
@@ -51,6 +55,7 @@ pub struct OpChecks {
 pub struct Reader {
     rx: Receiver<Feed>,
     back: SyncSender<Op>,
+    answers: SyncSender<ProbeAnswer>,
 }
 
 impl Reader {
@@ -58,10 +63,11 @@ impl Reader {
     pub fn spawn(ops: OpStream, checks: OpChecks) -> std::io::Result<Self> {
         let (tx, rx) = sync_channel(QUEUE_OPS);
         let (back, returned) = sync_channel(QUEUE_OPS);
+        let (answers, answered) = sync_channel(1);
         std::thread::Builder::new()
             .name("klar-reader".into())
-            .spawn(move || read(ops, &checks, &tx, &returned))?;
-        Ok(Self { rx, back })
+            .spawn(move || read(ops, &checks, &tx, &returned, &answered))?;
+        Ok(Self { rx, back, answers })
     }
 
     /// The next item: waits for it when `wait`, else `None` when there is none yet (the
@@ -82,6 +88,12 @@ impl Reader {
         }
     }
 
+    /// The machine's answer to the probing move of a [`Feed::Probe`]: the reader goes on.
+    pub fn answer_probe(&self, answer: ProbeAnswer) {
+        // an ended reader needs no answer
+        let _ = self.answers.try_send(answer);
+    }
+
     /// Hands an op the loop is done with back to be freed by the reader.
     pub fn give_back(&self, op: Op) {
         // A full queue (or an ended reader) hands the op back here: dropped in the loop.
@@ -91,7 +103,13 @@ impl Reader {
 
 /// The reader thread: reads the program into the queue until it ends, an error, or the
 /// servo loop hangs up; frees what comes back meanwhile and after.
-fn read(mut ops: OpStream, checks: &OpChecks, tx: &SyncSender<Feed>, returned: &Receiver<Op>) {
+fn read(
+    mut ops: OpStream,
+    checks: &OpChecks,
+    tx: &SyncSender<Feed>,
+    returned: &Receiver<Op>,
+    answered: &Receiver<ProbeAnswer>,
+) {
     loop {
         while returned.try_recv().is_ok() {}
         let next = match ops.next() {
@@ -109,10 +127,23 @@ fn read(mut ops: OpStream, checks: &OpChecks, tx: &SyncSender<Feed>, returned: &
         let sent = match next {
             Ok(Some(op)) => planner_ops(op, &checks.letters, &checks.positioning)
                 .all(|op| tx.send(Feed::Op(op, blocks, basis)).is_ok()),
-            Ok(None) => {
-                let _ = tx.send(Feed::End(blocks));
-                false
-            }
+            Ok(None) => match ops.probe_request() {
+                Some(r) => {
+                    let sent = tx.send(Feed::Probe(r, ops.blank(), blocks)).is_ok();
+                    // the program goes on once the machine has measured the move
+                    match answered.recv() {
+                        Ok(a) if sent => {
+                            ops.answer_probe(a);
+                            true
+                        }
+                        _ => false,
+                    }
+                }
+                None => {
+                    let _ = tx.send(Feed::End(blocks));
+                    false
+                }
+            },
             Err(e) => {
                 let _ = tx.send(Feed::Error(e, blocks));
                 false

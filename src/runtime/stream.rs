@@ -72,6 +72,27 @@ impl OpStream {
         self.basis
     }
 
+    /// The probing move the interpreter waits for the machine to measure (measured
+    /// probing): every op before it has been given out.
+    pub fn probe_request(&self) -> Option<klar_interp::ProbeRequest> {
+        self.interp.probe_request()
+    }
+
+    /// The machine's answer to [`OpStream::probe_request`].
+    pub fn answer_probe(&mut self, answer: klar_interp::ProbeAnswer) {
+        // the next op starts where the axes came to rest; under radius compensation the
+        // planner refuses the gap (probe cycles move with compensation off)
+        if !self.comp.moved_to(answer.stop) {
+            tracing::warn!("a probing move under radius compensation");
+        }
+        self.interp.answer_probe(answer);
+    }
+
+    /// The program's BLK FORM (for a simulated part shaped after it).
+    pub fn blank(&self) -> Option<klar_interp::Blank> {
+        self.interp.blank()
+    }
+
     /// Blocks the interpreter executed.
     pub fn blocks_executed(&self) -> u64 {
         self.interp.blocks_executed()
@@ -232,6 +253,16 @@ impl Iterator for OpStream {
                 Some(Err(d)) => {
                     self.done = true;
                     return Some(Err(RunError::Program(d)));
+                }
+                // waiting for a probing move: what compensation holds goes out, then none
+                None if self.interp.probe_request().is_some() => {
+                    while let Some(op) = self.comp.pop() {
+                        self.ready.push_back(op);
+                    }
+                    if self.ready.is_empty() {
+                        return None;
+                    }
+                    continue;
                 }
                 None => {
                     self.done = true;

@@ -6,6 +6,7 @@
 pub mod hold;
 pub mod mill5;
 pub mod peers;
+pub mod probing;
 pub mod threads;
 pub mod vfd_peer;
 

@@ -508,6 +508,23 @@ impl AxisBackend for Cia402Backend {
         lock(&self.net).axes
     }
 
+    /// Touch probe 1 of the axis's drive (see [`super::touch_probe`]).
+    fn arm_touch_probe(&mut self, axis: usize) -> Result<bool, BackendError> {
+        Cia402Backend::arm_touch_probe(self, axis)
+            .map(|()| true)
+            .map_err(|e| BackendError::Communication(e.to_string()))
+    }
+
+    fn touch_probe_position(&mut self, axis: usize) -> Result<Option<f64>, BackendError> {
+        Cia402Backend::touch_probe_position(self, axis)
+            .map_err(|e| BackendError::Communication(e.to_string()))
+    }
+
+    fn disarm_touch_probe(&mut self, axis: usize) -> Result<(), BackendError> {
+        Cia402Backend::disarm_touch_probe(self, axis)
+            .map_err(|e| BackendError::Communication(e.to_string()))
+    }
+
     /// 1 when the exchange is pipelined (the positions answer the SYNC before), else 0.
     fn feedback_lag(&self) -> u32 {
         u32::from(lock(&self.net).pipelined())

@@ -321,6 +321,18 @@ impl IsoState {
         self.parser.cycle.q = open.q;
         // G400 … G499 are the touch-probe cycles, `TCH PROBE 4nn` in Klartext
         let stmt = if (400..500).contains(&open.number) {
+            if self.machine.measured_probing() {
+                // a cycle that waits for its probing moves runs again from its block, which
+                // the cycle lines of TNC ISO do not allow: refused before any motion
+                self.failed_head = Some(open.loc);
+                return Err((
+                    None,
+                    ProgramError::NotSupported(format!(
+                        "G{} on a machine that measures touch points with its drives (TCH PROBE in Klartext runs there)",
+                        open.number
+                    )),
+                ));
+            }
             Stmt::TouchProbe {
                 number: open.number,
                 sub: None,

@@ -93,6 +93,9 @@ pub(crate) enum Flow {
     /// SL cycle call: run these contour subprograms (cycle 14) in collecting mode, then
     /// the cycle ([`Machine::finish_contours`]).
     Contours(Vec<LabelKey>),
+    /// A `TCH PROBE` block waits for the machine to measure a probing move: run the block
+    /// again once it has ([`super::probe_wait`]).
+    ProbeWait,
 }
 
 /// An execution error, located at a byte position of the block (or the block start).

@@ -30,6 +30,7 @@ pub(crate) mod probe_measure;
 pub(crate) mod probe_ref;
 pub mod probe_report;
 pub(crate) mod probe_rotary;
+pub(crate) mod probe_wait;
 pub(crate) mod retract;
 pub(crate) mod rotary_feed;
 pub(crate) mod stmt;

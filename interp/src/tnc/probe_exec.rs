@@ -35,6 +35,9 @@
 //!   the stylus may deflect is refused before the move ("probing feed too high"), as is a
 //!   touch that comes before the probe can have reached its probing feed;
 //!
+//! - measured probing ([`super::probe_wait`]): the machine runs each probing move, stops it at
+//!   the trigger and answers with the latched position; the cycle waits for it.
+//!
 //! Not modelled: the tilted working plane (probing is refused in it). Without a
 //! [`ProbeStop`] the axes stop on the trigger point, which the interpreter knows before the
 //! move. Q303=0 (the datum table): see [`super::probe_ref`].
@@ -45,11 +48,12 @@ use super::cycle_exec::CycleDef;
 use super::cycle_words::OldItem;
 use super::exec::{ExecError, Flow, Machine, here};
 use super::expr::{ParamKind, ParamRef};
+use super::probe_wait::Measured;
 use super::stmt::Parsed;
 use crate::cycles::{ParamKey, ParamSource};
 use crate::diag::ProgramError;
 use crate::op::{AxisLetter, Feed, Op, OpKind, Pose, PresetWrite, ProbeResult, SourceLoc};
-use crate::probe::{Probe, ProbeData, ProbeError, ProbeStop};
+use crate::probe::{Probe, ProbeData, ProbeError, ProbeRequest, ProbeStop};
 
 /// A point in the working plane's axes: first axis, second axis, tool axis (mm).
 pub(super) type P3 = [f64; 3];
@@ -63,18 +67,21 @@ pub(crate) struct ProbeState {
     pub data: ProbeData,
     /// The head block of an old-format cycle 0 or 1: cycle, result parameter, axis,
     /// direction sign.
-    old: Option<OldHead>,
+    pub(super) old: Option<OldHead>,
     /// Height of the surface found by the probe-axis touch of a centre cycle (Q381=1).
     pub axis_hit: Option<f64>,
     /// The Q parameters the cycle under way has written (number, value).
     written: Vec<(u32, f64)>,
     /// The preset the cycle under way has written.
     preset: Option<PresetWrite>,
+    /// Measured probing ([`super::probe_wait`]): the touch points come from the machine;
+    /// `None`: from `probe`.
+    pub measured: Option<Measured>,
 }
 
 /// What an old-format head block (`0.0`, `1.0`, `1.1`) said.
 #[derive(Debug, Clone, Copy)]
-struct OldHead {
+pub(super) struct OldHead {
     cycle: u32,
     result: Option<ParamRef>,
     /// Probing direction in X, Y, Z (program coordinates), once known.
@@ -109,7 +116,7 @@ impl Machine {
         out: &mut VecDeque<Op>,
         loc: SourceLoc,
     ) -> Result<Flow, ExecError> {
-        if self.probe.probe.is_none() {
+        if self.probe.probe.is_none() && self.probe.measured.is_none() {
             return Err(perr(ProbeError::NoProbe(number)));
         }
         if !self.tilt.identity {
@@ -125,12 +132,16 @@ impl Machine {
         };
         self.probe.written.clear();
         self.probe.preset = None;
-        match sub {
-            Some(s) => self.old_probe(number, s, &parsed.cycle.items, run, out)?,
-            None => {
-                let def = self.read_q_def(number, parsed)?;
-                self.probe_cycle(&def, run, out)?;
-            }
+        self.probe_block_start();
+        let base = out.len();
+        let r = match sub {
+            Some(s) => self.old_probe(number, s, &parsed.cycle.items, run, out),
+            None => self
+                .read_q_def(number, parsed)
+                .and_then(|def| self.probe_cycle(&def, run, out)),
+        };
+        if let Some(flow) = self.probe_flow(r, out, base)? {
+            return Ok(flow);
         }
         // What the cycle measured, for displays: after its moves, where the results hold.
         if !self.probe.written.is_empty() || self.probe.preset.is_some() {
@@ -236,6 +247,7 @@ impl Machine {
         let blank = self.blank;
         let table = self.table_angle();
         if from != end
+            && self.probe.measured.is_none()
             && let Some(p) = self.probe.probe.as_mut()
             && let Some(hit) = {
                 p.table_at(table);
@@ -293,6 +305,10 @@ impl Machine {
         let radius = self.ball();
         let blank = self.blank;
         let table = self.table_angle();
+        let feed = Feed::Rate(self.probe.data.feed / 60.0);
+        if self.probe.measured.is_some() {
+            return self.measured_touch(start, (xyz(&m_start), xyz(&m_end)), run, out);
+        }
         let hit = match self.probe.probe.as_mut() {
             Some(p) => {
                 p.table_at(table);
@@ -300,7 +316,6 @@ impl Machine {
             }
             None => return Err(perr(ProbeError::NoProbe(run.cycle))),
         };
-        let feed = Feed::Rate(self.probe.data.feed / 60.0);
         let Some(h) = hit else {
             // the probe runs its whole distance, then the program stops
             self.probe_line(end, feed, run, out);
@@ -320,18 +335,11 @@ impl Machine {
                 point: run.point,
             }));
         }
-        let (a, b, n) = self.plane.axes();
-        let to_plane = |m: &Machine, p: P3| {
-            let mut q = m_start;
-            (q[AxisLetter::X], q[AxisLetter::Y], q[AxisLetter::Z]) = (p[0], p[1], p[2]);
-            let q = m.cyc.xf.unmap_point(&q);
-            [q[a], q[b], q[n]]
-        };
-        let trigger = to_plane(self, h);
+        let trigger = self.to_plane(&m_start, h);
         let stop = match self.probe.data.stop {
             Some(s) => {
                 let o = self.overrun(&s, xyz(&m_start), xyz(&m_end), h, moved, run)?;
-                to_plane(self, o)
+                self.to_plane(&m_start, o)
             }
             None => trigger,
         };
@@ -339,6 +347,75 @@ impl Machine {
         let back = self.positioning();
         self.probe_line(start, back, run, out);
         Ok(trigger)
+    }
+
+    /// The working-plane coordinates of the machine X, Y, Z point `p` (the other axes as in
+    /// the machine pose `at`).
+    fn to_plane(&self, at: &Pose, p: P3) -> P3 {
+        let (a, b, n) = self.plane.axes();
+        let mut q = *at;
+        (q[AxisLetter::X], q[AxisLetter::Y], q[AxisLetter::Z]) = (p[0], p[1], p[2]);
+        let q = self.cyc.xf.unmap_point(&q);
+        [q[a], q[b], q[n]]
+    }
+
+    /// A probing move measured by the machine ([`super::probe_wait`]) from `start` (working
+    /// plane coordinates; `m` the move's start and end in machine X, Y, Z): the machine's
+    /// answer, or a wait for it. The machine runs the probing move itself (it is no op), so
+    /// that it can stop it at the trigger. A stop distance the stylus cannot take is refused
+    /// before the move. Returns the trigger position.
+    fn measured_touch(
+        &mut self,
+        start: P3,
+        m: (P3, P3),
+        run: Run,
+        out: &mut VecDeque<Op>,
+    ) -> Result<P3, ExecError> {
+        let (m_start, m_end) = m;
+        let radius = self.ball();
+        let stop = self.probe.data.stop;
+        if let Some(s) = &stop {
+            self.overrun(s, m_start, m_end, m_start, f64::INFINITY, run)?;
+        }
+        let feed = self.probe.data.feed;
+        let answer = self.probe.measured.as_mut().and_then(Measured::next_answer);
+        let Some(answer) = answer else {
+            if let Some(w) = self.probe.measured.as_mut() {
+                w.ask(ProbeRequest {
+                    from: m_start,
+                    to: m_end,
+                    feed,
+                    radius,
+                });
+            }
+            return Err(perr(ProbeError::Pending(run.cycle)));
+        };
+        let at = self.cyc.xf.map_point(&self.pose_at(start));
+        // the axes stand where they came to rest
+        self.pos = self.pose_at(self.to_plane(&at, answer.stop));
+        let Some(h) = answer.trigger else {
+            return Err(perr(ProbeError::NotReached {
+                cycle: run.cycle,
+                point: run.point,
+                distance: self.probe.data.distance,
+            }));
+        };
+        let moved = (0..3)
+            .map(|i| (h[i] - m_start[i]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if moved < 1e-9 {
+            return Err(perr(ProbeError::AlreadyInContact {
+                cycle: run.cycle,
+                point: run.point,
+            }));
+        }
+        if let Some(s) = &stop {
+            self.overrun(s, m_start, m_end, h, moved, run)?;
+        }
+        let back = self.positioning();
+        self.probe_line(start, back, run, out);
+        Ok(self.to_plane(&at, h))
     }
 
     /// Where the axes of a real probe come to rest (machine X, Y, Z) after touching at `hit`

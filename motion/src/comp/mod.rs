@@ -56,7 +56,7 @@ pub use error::{Blocks, CompError};
 
 use approach::{Approach, Depart};
 use element::{Element, Motion, Pending, Shape, Trail, line};
-use klar_interp::{CompSide, CornerRule, Op, OpKind, Plane, Pose, SourceLoc};
+use klar_interp::{AxisLetter, CompSide, CornerRule, Op, OpKind, Plane, Pose, SourceLoc};
 use plane::{project, with_point};
 use std::collections::VecDeque;
 
@@ -217,6 +217,19 @@ impl Compensator {
     /// The active tool radius including DR.
     pub fn tool_radius(&self) -> f64 {
         self.tool
+    }
+
+    /// The machine moved the tool itself to `to` (X, Y, Z; a probing move it stopped at the
+    /// probe's trigger) with compensation off: the next op starts there. False (nothing
+    /// changes) while compensation is on or an approach waits.
+    pub fn moved_to(&mut self, to: [f64; 3]) -> bool {
+        if !matches!(self.state, State::Off) || self.approach.is_some() {
+            return false;
+        }
+        for (l, v) in [AxisLetter::X, AxisLetter::Y, AxisLetter::Z].iter().zip(to) {
+            self.pos[*l] = v;
+        }
+        true
     }
 
     fn side_sign(side: CompSide) -> f64 {

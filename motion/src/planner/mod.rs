@@ -33,6 +33,7 @@ mod deep;
 mod drops;
 mod handover;
 mod move_hold;
+mod outside;
 pub mod path;
 #[cfg(test)]
 mod pool_tests;
