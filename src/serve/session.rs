@@ -146,6 +146,18 @@ pub struct Snapshot {
     pub trail: Vec<[f64; 3]>,
 }
 
+/// Functions the machine thread calls around the servo cycles of a run: `begin` right
+/// before the first cycle (the run has started), `end` right after the last (before the
+/// run's end is handled). A place to mark the thread for a measurement, such as counting
+/// what it allocates while it steps.
+#[derive(Debug, Clone, Copy)]
+pub struct SteppingHooks {
+    /// Called before the first servo cycle.
+    pub begin: fn(),
+    /// Called after the last servo cycle.
+    pub end: fn(),
+}
+
 /// The machine thread's side of the channels.
 pub struct MachineLoop {
     config: MachineConfig,
@@ -166,6 +178,8 @@ pub struct MachineLoop {
     scratch: PathBuf,
     /// The operator's stop from outside (signals): ends a running program and the loop.
     stop: OperatorStop,
+    /// Called around the servo cycles of each run.
+    hooks: Option<SteppingHooks>,
 }
 
 /// Finite differences of the commanded positions, one servo cycle apart.
@@ -242,7 +256,14 @@ impl MachineLoop {
             program_path: None,
             feed_override: 1.0,
             stop: OperatorStop::new(),
+            hooks: None,
         }
+    }
+
+    /// Makes the loop call `hooks` around the servo cycles of every run.
+    pub fn with_stepping_hooks(mut self, hooks: SteppingHooks) -> Self {
+        self.hooks = Some(hooks);
+        self
     }
 
     /// Makes the loop watch `stop`: a request stops a running program under control (a
@@ -438,6 +459,9 @@ impl MachineLoop {
         let mut last_actual = self.standing.clone();
         // Read every cycle into the same buffers (no allocation per cycle).
         let mut status = run.status();
+        if let Some(h) = self.hooks {
+            (h.begin)();
+        }
         let outcome = loop {
             match self.commands.try_recv() {
                 Ok(c) => self.run_command(&mut run, c),
@@ -481,6 +505,9 @@ impl MachineLoop {
                 Err(e) => break Some(e),
             }
         };
+        if let Some(h) = self.hooks {
+            (h.end)();
+        }
         // A manual run that ended normally leaves the spindle as it was (turning on); any
         // other run's end stops it.
         let keep =
