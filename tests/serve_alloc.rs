@@ -101,6 +101,7 @@ fn the_machine_thread_does_not_allocate_while_it_steps_a_served_run() {
     let slot = latest.clone();
     let machine = std::thread::spawn(move || {
         MachineLoop::new(config, rx, snapshots, slot)
+            .expect("the publisher starts")
             .with_stepping_hooks(SteppingHooks { begin, end })
             .run();
     });
@@ -143,7 +144,10 @@ fn the_machine_thread_does_not_allocate_while_it_steps_a_served_run() {
     for (got, want) in last.commanded.iter().zip([-10.0, -10.0, 5.0]) {
         assert!((got - want).abs() < 1e-6, "{:?}", last.commanded);
     }
-    let (allocs, frees) = (ALLOCS.load(Ordering::Relaxed), FREES.load(Ordering::Relaxed));
+    let (allocs, frees) = (
+        ALLOCS.load(Ordering::Relaxed),
+        FREES.load(Ordering::Relaxed),
+    );
     assert_eq!(
         (allocs, frees),
         (0, 0),
