@@ -907,6 +907,10 @@ impl<'a, 'w> Run<'a, 'w> {
                     if let Err(e) = self.planner.push(op) {
                         self.stop_reading(RunError::Motion(e));
                     }
+                    // A spline block's coefficients are freed by the reader, not here.
+                    if let Some(spent) = self.planner.take_spent() {
+                        self.reader.give_back(spent);
+                    }
                 }
                 Some(Feed::Error(e, blocks)) => {
                     self.blocks = self.blocks.max(blocks);
