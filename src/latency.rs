@@ -215,6 +215,13 @@ pub struct Pacer {
     half_period: i64,
     /// Lateness of every wake-up.
     pub histogram: LatencyHistogram,
+    /// The loop's own time per cycle: from a wake-up to the next call to wait.
+    pub work: LatencyHistogram,
+    /// Cycles whose work ran past the next deadline (their lateness is the work's, not
+    /// the wake-up's).
+    pub overruns: u64,
+    /// Monotonic time of the last wake-up, ns.
+    woke: Option<i64>,
 }
 
 impl Pacer {
@@ -224,6 +231,9 @@ impl Pacer {
             origin: now_ns(),
             half_period: (period * 0.5e9).round() as i64,
             histogram: LatencyHistogram::new(),
+            work: LatencyHistogram::new(),
+            overruns: 0,
+            woke: None,
         }
     }
 
@@ -231,8 +241,17 @@ impl Pacer {
     /// (seconds) and whether the slot was missed (the schedule then moves on).
     pub fn wait(&mut self, t: f64) -> (f64, bool) {
         let due = self.origin + (t * 1e9).round() as i64;
+        let called = now_ns();
+        if let Some(w) = self.woke {
+            self.work.record(called - w);
+        }
+        if called > due {
+            self.overruns += 1;
+        }
         sleep_until(due);
-        let late = (now_ns() - due).max(0);
+        let woke = now_ns();
+        self.woke = Some(woke);
+        let late = (woke - due).max(0);
         self.histogram.record(late);
         let missed = late > self.half_period;
         if missed {

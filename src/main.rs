@@ -565,6 +565,12 @@ fn cmd_run(
             if let Some(l) = &report.lateness {
                 say!("lateness:     {l}");
             }
+            if let Some(w) = &report.cycle_work {
+                say!(
+                    "cycle work:   {w}; {} ran past the next deadline",
+                    report.work_overruns
+                );
+            }
         }
     }
     let code = match error {

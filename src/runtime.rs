@@ -89,6 +89,11 @@ pub struct RunReport {
     pub underruns: u64,
     /// Wake-up lateness of the servo cycles on the wall clock (realtime runs).
     pub lateness: Option<crate::latency::LatenessSummary>,
+    /// The servo loop's own time per cycle, from a wake-up to the next wait (realtime
+    /// runs): tells a late wake-up from a cycle whose work ran long.
+    pub cycle_work: Option<crate::latency::LatenessSummary>,
+    /// Cycles whose work ran past the next cycle's deadline (realtime runs).
+    pub work_overruns: u64,
     /// Servo cycles in which the planner wanted ops the program reader had not yet
     /// delivered (realtime runs): the path then brakes for the end of what it has.
     pub starved: u64,
@@ -899,6 +904,8 @@ impl<'a, 'w> Run<'a, 'w> {
         self.report.spindle_warning = self.io.spindle_mut().and_then(|s| s.stop_warning());
         if self.report.realtime {
             self.report.lateness = Some(self.pacer.histogram.summary());
+            self.report.cycle_work = Some(self.pacer.work.summary());
+            self.report.work_overruns = self.pacer.overruns;
         }
         let report = self.report;
         let trace_done = match self.trace {
@@ -948,6 +955,10 @@ impl<'a, 'w> Run<'a, 'w> {
                     }
                     if let Err(e) = self.planner.push(op) {
                         self.stop_reading(RunError::Motion(e));
+                    }
+                    // A spline block's coefficients are freed by the reader, not here.
+                    if let Some(spent) = self.planner.take_spent() {
+                        self.reader.give_back(spent);
                     }
                 }
                 Some(Feed::Error(e, blocks)) => {

@@ -1,16 +1,17 @@
 //! The servo loop does not allocate once the run has started: a counting global allocator
 //! counts the allocations, reallocations and frees made by the thread that runs the loop,
 //! over a realtime run on the simulated mill of a program with lines, arcs, a helix and
-//! blended corners. The interpreter runs in the reader thread, the speed step reuses its
-//! buffers, the planner's queues are reserved when it is built and its corner blends go into
-//! slots made then (see docs/canopen.md).
+//! blended corners; of a dense polyline whose look-ahead holds more pieces than the
+//! planner's reserved queue; and of spline blocks. The interpreter runs in the reader thread,
+//! the speed step reuses its buffers, the planner's queues are reserved when it is built (a
+//! longer look-ahead waits for room instead of growing them), and its corner blends and
+//! spline elements go into slots made then (see docs/canopen.md).
 
 use klar::config::MachineConfig;
 use klar::runtime::{Run, RunOptions};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 use std::io::Write;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 mod common;
 
@@ -20,20 +21,24 @@ struct Counting;
 thread_local! {
     /// Set while the servo thread runs its loop.
     static MARKED: Cell<bool> = const { Cell::new(false) };
+    /// Allocations (and reallocations) and frees of this thread while marked.
+    static ALLOCS: Cell<u64> = const { Cell::new(0) };
+    static FREES: Cell<u64> = const { Cell::new(0) };
 }
-
-static ALLOCS: AtomicU64 = AtomicU64::new(0);
-static FREES: AtomicU64 = AtomicU64::new(0);
 
 fn marked() -> bool {
     MARKED.try_with(Cell::get).unwrap_or(false)
+}
+
+fn bump(counter: &'static std::thread::LocalKey<Cell<u64>>) {
+    let _ = counter.try_with(|c| c.set(c.get() + 1));
 }
 
 // SAFETY: every call is forwarded unchanged to the system allocator.
 unsafe impl GlobalAlloc for Counting {
     unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
         if marked() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
+            bump(&ALLOCS);
         }
         // SAFETY: the caller's contract is passed on.
         unsafe { System.alloc(layout) }
@@ -41,7 +46,7 @@ unsafe impl GlobalAlloc for Counting {
 
     unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
         if marked() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
+            bump(&ALLOCS);
         }
         // SAFETY: the caller's contract is passed on.
         unsafe { System.alloc_zeroed(layout) }
@@ -49,7 +54,7 @@ unsafe impl GlobalAlloc for Counting {
 
     unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
         if marked() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
+            bump(&ALLOCS);
         }
         // SAFETY: the caller's contract is passed on.
         unsafe { System.realloc(ptr, layout, new_size) }
@@ -57,7 +62,7 @@ unsafe impl GlobalAlloc for Counting {
 
     unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
         if marked() {
-            FREES.fetch_add(1, Ordering::Relaxed);
+            bump(&FREES);
         }
         // SAFETY: the caller's contract is passed on.
         unsafe { System.dealloc(ptr, layout) }
@@ -95,9 +100,18 @@ const PROGRAM: &str = "\
 22 END PGM ALLOC MM
 ";
 
-#[test]
-fn the_servo_thread_does_not_allocate() {
-    let path = common::temp_program("alloc.h", PROGRAM);
+/// What a run counted.
+struct Counted {
+    report: klar::runtime::RunReport,
+    allocs: u64,
+    frees: u64,
+}
+
+/// Runs `program` on the simulated mill (on the wall clock when `realtime`) in a thread of
+/// its own, counting that thread's allocations and frees over its servo loop; checks that
+/// the trace has a row per cycle.
+fn run_counted(name: &str, program: &str, realtime: bool) -> Counted {
+    let path = common::temp_program(name, program);
     let config = MachineConfig::builtin_mill();
     let (mut writer, rx) = klar::rt::chunk_queue();
     let drained = std::thread::spawn(move || {
@@ -106,7 +120,7 @@ fn the_servo_thread_does_not_allocate() {
     });
     let servo = std::thread::spawn(move || {
         let options = RunOptions {
-            realtime: true,
+            realtime,
             trace: Some(&mut writer as &mut dyn Write),
         };
         let mut run = Run::start(&path, &config, options).expect("the run starts");
@@ -119,28 +133,104 @@ fn the_servo_thread_does_not_allocate() {
             }
         };
         MARKED.with(|m| m.set(false));
+        let counts = (ALLOCS.with(Cell::get), FREES.with(Cell::get));
         let report = run.finish(ended).map_err(|f| f.error.to_string());
         drop(writer);
-        report
+        report.map(|r| (r, counts))
     });
-    let report = servo.join().expect("servo thread").expect("the run ends");
+    let (report, (allocs, frees)) = servo.join().expect("servo thread").expect("the run ends");
     let trace = drained.join().expect("writer thread").expect("trace");
-    let allocs = ALLOCS.load(Ordering::Relaxed);
-    let frees = FREES.load(Ordering::Relaxed);
     // The run really moved along the whole program and wrote its trace.
-    assert!(report.cycles > 1000, "{} cycles", report.cycles);
+    assert!(report.cycles > 100, "{} cycles", report.cycles);
     let rows = trace.iter().filter(|&&b| b == b'\n').count() as u64;
     assert_eq!(
         rows,
         report.cycles + 1,
         "a trace row per cycle and a header"
     );
+    Counted {
+        report,
+        allocs,
+        frees,
+    }
+}
+
+#[test]
+fn the_servo_thread_does_not_allocate() {
+    let c = run_counted("alloc.h", PROGRAM, true);
+    assert!(c.report.cycles > 1000, "{} cycles", c.report.cycles);
     // The program's corners were blended (a stop at each would be allocation-free too).
-    assert!(report.blends > 0, "no corner was blended");
+    assert!(c.report.blends > 0, "no corner was blended");
     assert_eq!(
-        (allocs, frees),
+        (c.allocs, c.frees),
         (0, 0),
         "allocations and frees in the servo thread over {} cycles",
-        report.cycles
+        c.report.cycles
+    );
+}
+
+/// A zigzag of `chords` chords along X, 0.02 mm forward and 0.02 mm across each: corners of
+/// 90° blended one by one, so each chord leaves pieces of its own in the look-ahead, which
+/// within the look-ahead distance on the built-in mill (about 210 mm) would hold more than
+/// the reserved 4096 (motion's `reserve_tests` counts them on the planner alone).
+fn zigzag(chords: usize) -> String {
+    let mut p = String::from("0 BEGIN PGM DENSE MM\n1 TOOL CALL 1 Z S2000\n");
+    // A line longer than the look-ahead first: the chords are taken in while the servo
+    // loop runs, not when the run starts.
+    p.push_str("2 L Z+5 R0 FMAX\n3 L X-250 Y+0 FMAX\n4 L Z-1 F3000\n");
+    p.push_str("5 L X+0 Y+0 F12000\n");
+    for k in 1..=chords {
+        let (x, y) = (0.02 * k as f64, 0.02 * (k % 2) as f64);
+        p.push_str(&format!("{} L X{x:+.3} Y{y:+.3}\n", k + 5));
+    }
+    p.push_str(&format!("{} L Z+5 FMAX\n", chords + 6));
+    p.push_str(&format!("{} END PGM DENSE MM\n", chords + 7));
+    p
+}
+
+#[test]
+fn a_look_ahead_longer_than_the_reserve_waits_instead_of_allocating() {
+    let chords = 12_000;
+    // On simulated time: the zigzag's corners are slow, and the loop is the same.
+    let c = run_counted("dense.h", &zigzag(chords), false);
+    assert!(
+        c.report.blocks as usize > chords,
+        "{} blocks",
+        c.report.blocks
+    );
+    assert_eq!(
+        (c.allocs, c.frees),
+        (0, 0),
+        "allocations and frees in the servo thread over {} cycles",
+        c.report.cycles
+    );
+}
+
+/// Spline blocks as a CAM post-processor writes them (see programs/spline.h), several in a
+/// row so that the look-ahead holds more than one, after a line longer than the look-ahead
+/// (they are taken in while the servo loop runs).
+const SPLINES: &str = "\
+0 BEGIN PGM SPLINES MM
+1 TOOL CALL 1 Z S8000
+2 L Z+5 R0 FMAX
+3 L X-250 Y+19.385 FMAX
+4 L Z-0.5 F500
+4 L X+28.338 Y+19.385 F12000
+5 SPL X24.875 Y15.924 Z-0.5 K3X-4.688E-002 K2X2.459E-002 K1X3.486E+000 K3Y-4.563E-002 K2Y2.155E-002 K1Y3.486E+000 K3Z0.000E+000 K2Z0.000E+000 K1Z0.000E+000 F1000
+6 SPL X+21.875 Y+12.924 K3X+0 K2X+0 K1X+3 K3Y+0 K2Y+0 K1Y+3
+7 SPL X+18.875 Y+9.924 K3X+0.05 K2X-0.05 K1X+3 K3Y+0 K2Y+0 K1Y+3
+8 SPL X+15.875 Y+6.924 K3X-0.05 K2X+0.05 K1X+3 K3Y+0 K2Y+0 K1Y+3
+9 L Z+5 FMAX
+10 END PGM SPLINES MM
+";
+
+#[test]
+fn spline_blocks_do_not_allocate_in_the_servo_thread() {
+    let c = run_counted("splines.h", SPLINES, true);
+    assert_eq!(
+        (c.allocs, c.frees),
+        (0, 0),
+        "allocations and frees in the servo thread over {} cycles",
+        c.report.cycles
     );
 }

@@ -250,7 +250,7 @@ fn spline_length_to(t_end: f64) -> f64 {
 fn spline_starts_at_end_plus_coefficients_and_ends_at_end() {
     let (from, to, axes) = spline_case();
     let poly = Poly::new(from, to, &axes).unwrap().unwrap();
-    let seg = Segment::Poly(Box::new(poly));
+    let seg = Segment::Poly(std::sync::Arc::new(poly));
     assert_eq!(seg.position(0.0), from);
     assert_eq!(seg.position(seg.length()), to);
     let p1 = spline_at(1.0);
@@ -262,7 +262,9 @@ fn spline_starts_at_end_plus_coefficients_and_ends_at_end() {
 #[test]
 fn spline_tangents_at_both_ends_follow_the_derivative() {
     let (from, to, axes) = spline_case();
-    let seg = Segment::Poly(Box::new(Poly::new(from, to, &axes).unwrap().unwrap()));
+    let seg = Segment::Poly(std::sync::Arc::new(
+        Poly::new(from, to, &axes).unwrap().unwrap(),
+    ));
     // Travel runs from t = 1 to t = 0, so the direction is −dP/dt.
     for (s, t) in [(0.0, 1.0), (seg.length(), 0.0)] {
         let d = spline_dt(t).map(|x| -x);
@@ -277,7 +279,9 @@ fn spline_tangents_at_both_ends_follow_the_derivative() {
 #[test]
 fn spline_is_parameterised_by_arc_length() {
     let (from, to, axes) = spline_case();
-    let seg = Segment::Poly(Box::new(Poly::new(from, to, &axes).unwrap().unwrap()));
+    let seg = Segment::Poly(std::sync::Arc::new(
+        Poly::new(from, to, &axes).unwrap().unwrap(),
+    ));
     assert!(close(seg.length(), spline_length_to(0.0), 1e-9));
     for t in [0.9, 0.75, 0.5, 0.3, 0.1] {
         let s = spline_length_to(t);
@@ -296,7 +300,9 @@ fn spline_is_parameterised_by_arc_length() {
 #[test]
 fn spline_curvature_matches_the_cross_product_formula() {
     let (from, to, axes) = spline_case();
-    let seg = Segment::Poly(Box::new(Poly::new(from, to, &axes).unwrap().unwrap()));
+    let seg = Segment::Poly(std::sync::Arc::new(
+        Poly::new(from, to, &axes).unwrap().unwrap(),
+    ));
     for t in [0.8, 0.4] {
         // κ = |P' × P''| / |P'|³ with P'' = 6·K3·t + 2·K2 (sign of t-direction irrelevant).
         let d1 = spline_dt(t);

@@ -70,10 +70,9 @@ impl App {
         // Built on its thread: what it holds between runs (a spindle) stays there.
         let thread = std::thread::Builder::new()
             .name("klar-machine".into())
-            .spawn(move || {
-                MachineLoop::new(config, rx, to_pages, slot)
-                    .with_operator_stop(stop)
-                    .run();
+            .spawn(move || match MachineLoop::new(config, rx, to_pages, slot) {
+                Ok(m) => m.with_operator_stop(stop).run(),
+                Err(e) => tracing::error!("the snapshot publisher could not start: {e}"),
             })?;
         let app = App {
             inner: Arc::new(Inner {

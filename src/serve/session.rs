@@ -6,13 +6,15 @@
 //! never leaves this thread; the web side only talks to it through channels.
 
 mod manual_ops;
+pub mod publisher;
 mod readings;
 pub mod spindle;
 
 use super::manual::{ManualOp, Refusal};
 use crate::config::{BackendConfig, MachineConfig};
-use crate::runtime::{OperatorStop, Run, RunError, RunOptions, RunStatus, StopLevel};
+use crate::runtime::{OperatorStop, Run, RunError, RunOptions, StopLevel};
 use klar_interp::ProbeResult;
+use publisher::{PUBLISH_PERIOD, Publisher, Record};
 use serde::Serialize;
 use spindle::{HeldSpindle, SpindleRequest, SpindleStatus};
 use std::path::{Path, PathBuf};
@@ -20,9 +22,6 @@ use std::sync::mpsc::{Receiver, RecvTimeoutError, TryRecvError};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use tokio::sync::broadcast;
-
-/// Wall time between two published snapshots while a program runs.
-const PUBLISH_PERIOD: Duration = Duration::from_millis(40);
 
 /// Wall time between two snapshots while idle.
 const IDLE_PUBLISH_PERIOD: Duration = Duration::from_millis(500);
@@ -146,12 +145,24 @@ pub struct Snapshot {
     pub trail: Vec<[f64; 3]>,
 }
 
+/// Functions the machine thread calls around the servo cycles of a run: `begin` right
+/// before the first cycle (the run has started), `end` right after the last (before the
+/// run's end is handled). A place to mark the thread for a measurement, such as counting
+/// what it allocates while it steps.
+#[derive(Debug, Clone, Copy)]
+pub struct SteppingHooks {
+    /// Called before the first servo cycle.
+    pub begin: fn(),
+    /// Called after the last servo cycle.
+    pub end: fn(),
+}
+
 /// The machine thread's side of the channels.
 pub struct MachineLoop {
     config: MachineConfig,
     commands: Receiver<Command>,
-    snapshots: broadcast::Sender<Snapshot>,
-    latest: Arc<Mutex<Snapshot>>,
+    /// Where snapshots and the servo cycles' readings go.
+    publisher: Publisher,
     snap: Snapshot,
     program_path: Option<PathBuf>,
     feed_override: f64,
@@ -166,6 +177,8 @@ pub struct MachineLoop {
     scratch: PathBuf,
     /// The operator's stop from outside (signals): ends a running program and the loop.
     stop: OperatorStop,
+    /// Called around the servo cycles of each run.
+    hooks: Option<SteppingHooks>,
 }
 
 /// Finite differences of the commanded positions, one servo cycle apart.
@@ -191,7 +204,7 @@ impl Derivatives {
     fn update(&mut self, t: f64, commanded: &[f64], first: bool) {
         let dt = t - self.t;
         if first {
-            self.position = commanded.to_vec();
+            self.position.clone_from_slice(commanded);
             self.t = t;
             return;
         }
@@ -216,33 +229,41 @@ impl Derivatives {
 }
 
 impl MachineLoop {
-    /// A machine loop for `config`; snapshots go to `snapshots` and `latest`.
+    /// A machine loop for `config`; snapshots go to `snapshots` and `latest` from a
+    /// publisher thread started here (an error when it cannot be started).
     pub fn new(
         config: MachineConfig,
         commands: Receiver<Command>,
         snapshots: broadcast::Sender<Snapshot>,
         latest: Arc<Mutex<Snapshot>>,
-    ) -> Self {
+    ) -> std::io::Result<Self> {
+        let publisher = Publisher::start(snapshots, latest)?;
         let snap = idle_snapshot(&config);
         let nanos = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0, |d| d.as_nanos());
         let scratch =
             std::env::temp_dir().join(format!("klar-manual-{}-{nanos:x}", std::process::id()));
-        Self {
+        Ok(Self {
             standing: config.axes.iter().map(|a| a.start).collect(),
             homed: vec![false; config.axes.len()],
             held: None,
             scratch,
             config,
             commands,
-            snapshots,
-            latest,
+            publisher,
             snap,
             program_path: None,
             feed_override: 1.0,
             stop: OperatorStop::new(),
-        }
+            hooks: None,
+        })
+    }
+
+    /// Makes the loop call `hooks` around the servo cycles of every run.
+    pub fn with_stepping_hooks(mut self, hooks: SteppingHooks) -> Self {
+        self.hooks = Some(hooks);
+        self
     }
 
     /// Makes the loop watch `stop`: a request stops a running program under control (a
@@ -376,26 +397,19 @@ impl MachineLoop {
         self.publish();
     }
 
+    /// Hands the whole snapshot to the publisher (not between servo cycles: it allocates).
     fn publish(&mut self) {
-        self.publish_with(true);
+        self.publisher.send(self.snap.clone());
+        self.snap.trail.clear();
     }
 
-    /// Publishes the snapshot; between servo cycles (`wait` false) it never waits for a
-    /// reader of the latest-snapshot slot: when the slot is being read, this snapshot goes
-    /// only to the subscribers and a later one fills the slot.
-    fn publish_with(&mut self, wait: bool) {
-        self.snap.seq += 1;
-        let slot = if wait {
-            self.latest.lock().ok()
-        } else {
-            self.latest.try_lock().ok()
-        };
-        if let Some(mut l) = slot {
-            *l = self.snap.clone();
-        }
-        // No subscriber is not an error: nobody is watching.
-        let _ = self.snapshots.send(self.snap.clone());
-        self.snap.trail.clear();
+    /// Takes the readings of a run back from the publisher's slot and from `record` (the
+    /// newest) into the snapshot, before a whole one is published between servo cycles.
+    fn settle(&mut self, record: &mut Record) {
+        let axes = record.commanded.len();
+        self.publisher.take_back(&mut self.snap, axes);
+        record.apply(&mut self.snap);
+        record.trail.clear();
     }
 
     /// Runs the loaded program on the wall clock until it ends, taking commands between
@@ -430,14 +444,22 @@ impl MachineLoop {
         self.snap.actual = start.iter().map(|a| a.position).collect();
         self.snap.commanded.clone_from(&self.snap.actual);
         tracing::info!(program = %path.display(), "run started");
-        let mut derivatives = Derivatives::new(run.letters().len());
+        let axes = run.letters().len();
+        let mut derivatives = Derivatives::new(axes);
         let mut first = true;
-        let mut last_publish = Instant::now();
+        // Each cycle's reading, handed to the publisher through its slot (both sized here).
+        let mut record = Record::sized(axes);
+        let slot = self.publisher.slot();
+        self.publisher.take_back(&mut self.snap, axes);
+        let mut probes = run.probe_results().len();
         let mut last_trail_t = f64::NEG_INFINITY;
         let mut last_line = 0u32;
         let mut last_actual = self.standing.clone();
         // Read every cycle into the same buffers (no allocation per cycle).
         let mut status = run.status();
+        if let Some(h) = self.hooks {
+            (h.begin)();
+        }
         let outcome = loop {
             match self.commands.try_recv() {
                 Ok(c) => self.run_command(&mut run, c),
@@ -455,21 +477,22 @@ impl MachineLoop {
             // Before the first servo cycle there is no measured position yet.
             if status.t > 0.0 && status.t - last_trail_t >= TRAIL_PERIOD {
                 last_trail_t = status.t;
-                self.snap.trail.push(run.tool_position());
+                record.push_trail(run.tool_position());
             }
-            let done = !matches!(stepped, Ok(true));
-            if done || last_publish.elapsed() >= PUBLISH_PERIOD {
-                self.fill(&status, &derivatives, MachineState::Running);
-                self.read_run(&mut run, status.spindle_rpm);
-                if self.snap.manual.is_some() {
-                    // A manual move has no line in the loaded program.
-                    self.snap.line = 0;
-                }
-                if status.held {
-                    self.snap.state = MachineState::Held;
-                }
-                self.publish_with(done);
-                last_publish = Instant::now();
+            readings::read_cycle(&mut record, &status, &derivatives, &mut run);
+            record.single_block = self.snap.single_block;
+            // Never waits: while the publisher reads the slot, this reading waits for the
+            // next cycle (its trail points stay in `record`).
+            if let Ok(mut r) = slot.try_lock() {
+                r.take_from(&mut record);
+            }
+            // A touch-probe cycle's result (once per cycle, the motion at rest): published
+            // whole, which allocates.
+            if run.probe_results().len() != probes {
+                probes = run.probe_results().len();
+                self.snap.probe = run.probe_results().last().cloned();
+                self.settle(&mut record);
+                self.publish();
             }
             // At rest the drives hold the commanded position; after a fault the measured
             // one counts (see below).
@@ -481,6 +504,12 @@ impl MachineLoop {
                 Err(e) => break Some(e),
             }
         };
+        if let Some(h) = self.hooks {
+            (h.end)();
+        }
+        // The last reading, whole.
+        self.settle(&mut record);
+        self.publish();
         // A manual run that ended normally leaves the spindle as it was (turning on); any
         // other run's end stops it.
         let keep =
@@ -537,22 +566,6 @@ impl MachineLoop {
                 tracing::warn!("ignored while a program runs: {command:?}");
             }
         }
-    }
-
-    fn fill(&mut self, status: &RunStatus, d: &Derivatives, state: MachineState) {
-        let s = &mut self.snap;
-        s.state = state;
-        s.t = status.t;
-        s.line = status.line;
-        s.blocks = status.blocks;
-        s.commanded.clone_from(&status.commanded);
-        s.actual.clone_from(&status.actual);
-        s.following_error.clone_from(&status.following_error);
-        s.velocity.clone_from(&d.velocity);
-        s.acceleration.clone_from(&d.acceleration);
-        s.path_speed = status.path_speed;
-        s.feed_override = status.feed_override;
-        s.spindle_rpm = status.spindle_rpm;
     }
 
     fn end_with(&mut self, error: Option<RunError>, path: &Path) {

@@ -131,8 +131,9 @@ pub enum Segment {
     Line(Line),
     /// Circular arc or helix.
     Arc(Arc),
-    /// Cubic polynomial per axis (spline block).
-    Poly(Box<Poly>),
+    /// Cubic polynomial per axis (spline block), shared by the pieces cut from it (the
+    /// planner keeps it in a slot made up front: `planner::splines`).
+    Poly(std::sync::Arc<Poly>),
 }
 
 impl Segment {

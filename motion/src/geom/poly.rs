@@ -57,6 +57,19 @@ struct UDerivs {
 }
 
 impl Poly {
+    /// A spline of zero length at the origin that nothing follows: what a slot made up
+    /// front holds until a spline is written into it.
+    pub(crate) fn placeholder() -> Poly {
+        Poly {
+            from: Pose::default(),
+            to: Pose::default(),
+            k: [[0.0; 3]; 9],
+            metric: Metric::Linear,
+            table: [0.0; TABLE_INTERVALS + 1],
+            bounds: AxisBounds::default(),
+        }
+    }
+
     /// The spline from `from` (the current position) to `to` with coefficients per axis;
     /// axes without coefficients move linearly from `from` to `to` (they should be equal).
     /// `None` when the curve has zero length.

@@ -37,11 +37,14 @@ mod outside;
 pub mod path;
 #[cfg(test)]
 mod pool_tests;
+#[cfg(test)]
+mod reserve_tests;
 mod run;
 mod scan;
 mod search;
 pub mod smooth;
 pub mod speed;
+pub mod splines;
 #[cfg(test)]
 mod starved_tests;
 pub mod tcpm;
@@ -61,6 +64,7 @@ use crate::profile::Ramp;
 use klar_interp::{AxisLetter, Op, OpKind, Pose, SourceLoc};
 use path::{Element, MAX_OVERRIDE, Piece, Shape, Waiting, piece_limits};
 use speed::{Motion, Window};
+use splines::{SPLINE_SLOTS, SplinePool};
 use std::collections::VecDeque;
 
 /// Pieces and events the planner holds at most before it stops asking for input (memory
@@ -70,6 +74,11 @@ pub const BUFFER_CAPACITY: usize = 20_000;
 /// Pieces the planner makes room for when it is built (the look-ahead of a dense CAM
 /// pocket at the bench machine's speeds holds up to about 2 000).
 pub const RESERVED_PIECES: usize = 4096;
+
+/// Room kept free in the reserved piece queue for what one op can add (its element and the
+/// blends and splits committed with it, and a flush of the waiting elements): the planner
+/// takes no more ops once fewer than this are free ([`Planner::needs_input`]).
+pub const PIECE_MARGIN: usize = 1024;
 
 /// Limits in the speed window, events, waiting elements and polyline vertices the planner
 /// makes room for when it is built (the pocket's window holds up to 64 limits).
@@ -198,6 +207,12 @@ pub struct Planner {
     /// Slots for the blend curves of the committed path, made here so that committing a
     /// corner allocates nothing ([`BLEND_SLOTS`]).
     blends: BlendPool,
+    /// Slots for the spline elements waiting or ahead, made here so that pushing a spline
+    /// block allocates nothing ([`SPLINE_SLOTS`]).
+    splines: SplinePool,
+    /// The last spline op taken in, kept for the caller to free elsewhere
+    /// ([`Planner::take_spent`]).
+    spent: Option<Op>,
 }
 
 impl Planner {
@@ -273,17 +288,21 @@ impl Planner {
             settled: scan::SettleMemo::default(),
             move_hold: move_hold::MoveHold::default(),
             blends: BlendPool::new(BLEND_SLOTS),
+            splines: SplinePool::new(SPLINE_SLOTS),
+            spent: None,
         };
         planner.reserve();
         Ok(planner)
     }
 
     /// Reserves the queues' and buffers' room when the planner is built, so that the servo
-    /// loop does not grow them: [`RESERVED_PIECES`] pieces, [`RESERVED_LIMITS`] limits in
-    /// the window. A look-ahead beyond them grows them (an allocation per doubling).
+    /// loop does not grow them: [`RESERVED_PIECES`] pieces and as many markers (the
+    /// look-ahead stops short of filling them: [`Planner::needs_input`]), [`RESERVED_LIMITS`]
+    /// limits in the window.
     fn reserve(&mut self) {
         self.pieces.reserve(RESERVED_PIECES);
-        self.markers.reserve(RESERVED_LIMITS);
+        // A stop or an event at the end of each piece, at most (but for runs of events).
+        self.markers.reserve(RESERVED_PIECES);
         self.waiting.reserve(RESERVED_LIMITS);
         self.vertices.reserve(RESERVED_LIMITS);
         self.window.limits.reserve(RESERVED_LIMITS);
@@ -331,10 +350,19 @@ impl Planner {
     }
 
     /// True while the planner wants more ops (or [`Planner::finish`]) before sampling on:
-    /// until the committed path reaches beyond the look-ahead distance.
+    /// until the committed path reaches beyond the look-ahead distance, or its reserved
+    /// piece queue is full but for [`PIECE_MARGIN`].
+    ///
+    /// The second is back-pressure: a look-ahead of very many short pieces stops short of
+    /// the distance until the machine has passed some of them, rather than grow the queue
+    /// (an allocation) in the servo loop. The path stays safe, since its speed profile
+    /// always brakes for the end of what is committed: at worst the path slows down ahead
+    /// of that end until more fits. The pieces lie on the committed path, which the machine
+    /// travels and so frees without more input.
     pub fn needs_input(&self) -> bool {
         !self.finished
             && self.pieces.len() + self.markers.len() + self.waiting.len() < BUFFER_CAPACITY
+            && self.pieces.len() + PIECE_MARGIN < RESERVED_PIECES
             && self.committed_end - self.state.s < self.horizon.max(self.range)
     }
 
@@ -444,7 +472,7 @@ impl Planner {
                 (
                     Poly::new(start, *to, axes)
                         .map_err(geometry)?
-                        .map(|p| Segment::Poly(Box::new(p))),
+                        .map(|p| Segment::Poly(self.splines.store(p))),
                     feed,
                 )
             }
@@ -582,10 +610,21 @@ impl Planner {
             },
             events: Vec::new(),
         });
+        if matches!(op.kind, OpKind::Spline { .. }) {
+            // Its coefficients are on the heap: the caller may free them outside the loop.
+            self.spent = Some(op);
+        }
         while self.waiting.len() >= ELEMENTS_AHEAD && self.front_decidable() {
             self.commit_front(false)?;
         }
         Ok(())
+    }
+
+    /// The last spline op [`Planner::push`] took in and no longer needs (its coefficients
+    /// live on the heap), for the caller to free on another thread than the servo loop's.
+    /// Left here, it is freed when the next spline op takes its place.
+    pub fn take_spent(&mut self) -> Option<Op> {
+        self.spent.take()
     }
 
     /// An op that needs the machine standing on its point: exact stop, the op, then a hold

@@ -258,11 +258,16 @@ pub struct NewPiece {
     pub headroom: Headroom,
 }
 
-/// The pieces committing one element produces: the element's own part and the blend after
-/// it, kept inline (no allocation per element); any further piece goes to `more`.
+/// Pieces kept inline in [`NewPieces`]: the element's own part and every part of the blend
+/// after it, the most committing one element makes.
+const INLINE_PIECES: usize = BLEND_PARTS + 2;
+
+/// The pieces committing one element produces: the element's own part and the parts of the
+/// blend after it, kept inline (no allocation per element); any further piece goes to
+/// `more`.
 #[derive(Debug, Default)]
 pub struct NewPieces {
-    slots: [Option<NewPiece>; 2],
+    slots: [Option<NewPiece>; INLINE_PIECES],
     more: Vec<NewPiece>,
 }
 
@@ -278,7 +283,7 @@ impl NewPieces {
 impl IntoIterator for NewPieces {
     type Item = NewPiece;
     type IntoIter = std::iter::Chain<
-        std::iter::Flatten<std::array::IntoIter<Option<NewPiece>, 2>>,
+        std::iter::Flatten<std::array::IntoIter<Option<NewPiece>, INLINE_PIECES>>,
         std::vec::IntoIter<NewPiece>,
     >;
 

@@ -1,10 +1,11 @@
 //! What the snapshot shows of a run besides its positions: the spindle (commanded and
 //! measured), the tool in the frame of the program's path, and the last touch-probe results.
 
-use super::MachineLoop;
+use super::Derivatives;
+use super::publisher::Record;
 use super::spindle::SpindleStatus;
 use crate::config::MachineConfig;
-use crate::runtime::Run;
+use crate::runtime::{Run, RunStatus};
 use klar_interp::AxisLetter;
 
 /// The tool (X, Y, Z) in the frame of the program's path for machine positions `at` (the
@@ -14,17 +15,29 @@ pub fn tool_of(config: &MachineConfig, at: &[f64]) -> [f64; 3] {
     [p[AxisLetter::X], p[AxisLetter::Y], p[AxisLetter::Z]]
 }
 
-impl MachineLoop {
-    /// Reads the spindle, the tool and the probe results of `run` into the snapshot.
-    pub(super) fn read_run(&mut self, run: &mut Run<'_, '_>, measured_rpm: Option<f64>) {
-        self.snap.spindle = run
-            .spindle_commanded()
-            .map(|c| SpindleStatus::of(c, measured_rpm.unwrap_or(0.0)));
-        self.snap.tool = run.tool_position();
-        if let Some(last) = run.probe_results().last()
-            && self.snap.probe.as_ref() != Some(last)
-        {
-            self.snap.probe = Some(last.clone());
-        }
-    }
+/// Reads a servo cycle of `run` into `record`: its status, the commanded velocities and
+/// accelerations, the spindle and the tool (allocating nothing once `record` is sized for
+/// the machine).
+pub(super) fn read_cycle(
+    record: &mut Record,
+    status: &RunStatus,
+    d: &Derivatives,
+    run: &mut Run<'_, '_>,
+) {
+    record.held = status.held;
+    record.t = status.t;
+    record.line = status.line;
+    record.blocks = status.blocks;
+    record.commanded.clone_from(&status.commanded);
+    record.actual.clone_from(&status.actual);
+    record.following_error.clone_from(&status.following_error);
+    record.velocity.clone_from(&d.velocity);
+    record.acceleration.clone_from(&d.acceleration);
+    record.path_speed = status.path_speed;
+    record.feed_override = status.feed_override;
+    record.spindle_rpm = status.spindle_rpm;
+    record.spindle = run
+        .spindle_commanded()
+        .map(|c| SpindleStatus::of(c, status.spindle_rpm.unwrap_or(0.0)));
+    record.tool = run.tool_position();
 }
