@@ -19,8 +19,16 @@
 //!   probe is the active tool and has one there (the TNC keeps R and L of the probe in the
 //!   tool table and feeds, overtravel and set-up clearance in the touch-probe table);
 //!   klar's `[probe]` data give the rest, and the radius when the tool has none;
-//! - cycles 0 and 1 also leave the trigger position (ball centre, program coordinates) in
-//!   Q115 … Q117;
+//! - the probe's length is its tool length L (with the table's DL and TOOL CALL's DL): like
+//!   every tool length it is measured from the tool reference point on the spindle to the
+//!   stylus tip, and the control uses it only to place the spindle so that the tip stands
+//!   where the program says. klar's axes carry the tool tip (the length is part of the tool,
+//!   not of the axis positions), so L moves no axis and changes no touch point: a surface
+//!   height comes out the same whatever L the table gives;
+//! - cycles 0 and 1 also leave the trigger position in Q115 … Q117: the spindle's position,
+//!   the stylus length not taken off. klar gives the ball centre at the trigger (program
+//!   coordinates) with the active tool length added along the tool axis, so the tool-axis
+//!   value differs by exactly the difference of two probes' lengths;
 //! - a preset found by a cycle goes to row Q305 of the preset table when Q303=1 (Q305=0: the
 //!   active preset, which then acts at once; a row that is the active one acts at once as
 //!   well). The preset is chosen so that the measured point reads Q331/Q332 (Q333 in the
@@ -666,12 +674,15 @@ impl Machine {
                 let dir = [dir_xyz[a.index()], dir_xyz[b.index()], dir_xyz[n.index()]];
                 let t = self.probe_from_here(dir, run, out)?;
                 let tp = self.pose_at(t);
+                // Q115 … Q117: the spindle's position, the stylus length not compensated
+                let mut spindle = tp;
+                spindle[self.tool_axis] += self.tool_length;
                 for (q, ax) in [
                     (115, AxisLetter::X),
                     (116, AxisLetter::Y),
                     (117, AxisLetter::Z),
                 ] {
-                    self.set_q(q, tp[ax] / self.unit);
+                    self.set_q(q, spindle[ax] / self.unit);
                 }
                 if let Some(res) = head.result {
                     let k = dir_xyz.iter().position(|v| v.abs() == 1.0).unwrap_or(2);
