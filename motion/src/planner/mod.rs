@@ -15,9 +15,9 @@
 //! before the event is on the point): dwell (which also holds for its time), tool change,
 //! spindle and C-axis changes, program stops, the program end and explicit exact stops.
 //! Coolant, tolerance and radius-compensation ops do not stop or flush the look-ahead.
-//! [`OpKind::Tolerance`] sets the tolerance for the corners after it (`None`: the
-//! configured default). Radius compensation is the job of the stage before the planner;
-//! the planner follows the path it is given.
+//! [`OpKind::Tolerance`](klar_interp::OpKind::Tolerance) sets the tolerance for the corners
+//! after it (`None`: the configured default). Radius compensation is the job of the stage
+//! before the planner; the planner follows the path it is given.
 //!
 //! Feed override (0–150 %, [`Planner::set_feed_override`]) and feed hold
 //! ([`Planner::hold`], [`Planner::resume`]) act at once with jerk-limited speed changes on
