@@ -26,9 +26,11 @@
 
 mod axis_fault;
 pub(crate) mod command;
+mod cycle;
 mod display;
 mod error;
 mod events;
+mod feed;
 pub mod guard;
 mod log;
 mod operator;
@@ -36,6 +38,7 @@ mod pass_hold;
 mod per_rev;
 mod probing;
 mod reader;
+mod report;
 mod settle;
 mod spindle;
 mod stop;
@@ -48,18 +51,18 @@ use crate::latency::Pacer;
 use crate::machine::{MachineError, MachineIo};
 use crate::monitor::{StopCause, StopReport};
 use crate::testrun::positioning_axes;
-use crate::trace::{SpindleRow, TraceWriter};
+use crate::trace::TraceWriter;
 use command::CommandPath;
 pub use error::RunError;
-use klar_interp::{AxisLetter, OpKind, SourceLoc};
-use klar_motion::{AxisFault, Planner, Sample, Step};
+use klar_interp::{AxisLetter, SourceLoc};
+use klar_motion::{Planner, Step};
 use log::{LogQueue, LogRecord};
 pub use operator::{OperatorStop, StopLevel};
-use reader::{Feed, OpChecks, Reader};
+use reader::{OpChecks, Reader};
+pub use report::{AxisStart, RunFailure, RunReport, RunStatus};
 use std::collections::VecDeque;
 use std::io::Write;
 use std::path::Path;
-use std::time::Duration;
 use stop::PendingStop;
 use stream::OpStream;
 
@@ -69,97 +72,6 @@ pub struct RunOptions<'a> {
     pub realtime: bool,
     /// Where to write the trace CSV, if anywhere.
     pub trace: Option<&'a mut dyn Write>,
-}
-
-/// What a finished (or stopped) run measured.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct RunReport {
-    /// Machine time of the program in seconds (simulated, not wall time).
-    pub machine_time: f64,
-    /// Blocks the interpreter executed.
-    pub blocks: u64,
-    /// Servo cycles run.
-    pub cycles: u64,
-    /// Largest |following error| per machine axis.
-    pub max_following_error: Vec<(AxisLetter, f64)>,
-    /// Cycles whose setpoints missed their slot: in realtime mode a cycle that woke more
-    /// than half a servo period after its deadline on the wall clock (or, with an injected
-    /// `stall`, more than a period late); an injected `stall` longer than a period in
-    /// simulated runs.
-    pub underruns: u64,
-    /// Wake-up lateness of the servo cycles on the wall clock (realtime runs).
-    pub lateness: Option<crate::latency::LatenessSummary>,
-    /// The servo loop's own time per cycle, from a wake-up to the next wait (realtime
-    /// runs): tells a late wake-up from a cycle whose work ran long.
-    pub cycle_work: Option<crate::latency::LatenessSummary>,
-    /// Cycles whose work ran past the next cycle's deadline (realtime runs).
-    pub work_overruns: u64,
-    /// Servo cycles in which the planner wanted ops the program reader had not yet
-    /// delivered (realtime runs): the path then brakes for the end of what it has.
-    pub starved: u64,
-    /// Corner blends the planner made.
-    pub blends: u64,
-    /// Corners the planner stopped at exactly because every one of its preallocated blend
-    /// slots was held by the path ahead (`klar_motion::blend::BLEND_SLOTS`).
-    pub blends_refused: u64,
-    /// Seconds spent waiting for the spindle to reach speed (on the wall clock in realtime
-    /// runs).
-    pub spindle_wait: f64,
-    /// True when the run used the wall clock.
-    pub realtime: bool,
-    /// Log records of the servo loop dropped because their queue was full.
-    pub log_dropped: u64,
-    /// How the run was stopped early by a fault or a request, if it was.
-    pub stop: Option<StopReport>,
-    /// Set when the spindle's stop at the end of the run could not be confirmed by its
-    /// device: a warning that the spindle may still turn.
-    pub spindle_warning: Option<String>,
-    /// Where each axis stood when the run started.
-    pub start: Vec<AxisStart>,
-    /// The test run's planned machine time, s, when the test run ran before the start and
-    /// went through the whole program: what progress displays count against.
-    pub planned_time: Option<f64>,
-    /// What the touch-probe cycles measured, in the order they ran.
-    pub probe_results: Vec<klar_interp::ProbeResult>,
-}
-
-/// Where an axis stood when a run started: read from its drive when the drive measures its
-/// own position, else the machine file's `start`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct AxisStart {
-    /// The axis.
-    pub axis: AxisLetter,
-    /// Its position, mm or degrees.
-    pub position: f64,
-    /// True when its position is referenced (homed in this power cycle, an absolute
-    /// encoder, or a machine file that declares every axis homed with `start_homed`).
-    pub referenced: bool,
-}
-
-impl std::fmt::Display for AxisStart {
-    /// `X stands at 4.9500 mm (referenced)`.
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let unit = if self.axis.is_rotary() { "°" } else { "mm" };
-        let referenced = if self.referenced {
-            "referenced"
-        } else {
-            "not referenced"
-        };
-        write!(
-            f,
-            "{} stands at {:.4} {unit} ({referenced})",
-            self.axis, self.position
-        )
-    }
-}
-
-/// A run that ended early: the error plus what was measured until then.
-#[derive(Debug)]
-pub struct RunFailure {
-    /// Why it stopped.
-    pub error: RunError,
-    /// Figures up to the stop.
-    pub report: RunReport,
 }
 
 /// One program run on a machine, advanced step by step ([`Run::step`]) so that a front end
@@ -247,184 +159,6 @@ pub struct Run<'a, 'w> {
     probing: Option<probing::Probing>,
 }
 
-impl Run<'_, '_> {
-    /// One servo cycle at machine time `t` with the setpoints already in `io`.
-    fn servo_cycle(&mut self, t: f64) -> Result<(), RunError> {
-        self.wait_until(t);
-        let (wall, injected) = self.lateness(t);
-        let late = wall + injected;
-        if self.wall_late.1 || late > self.config.servo_period {
-            self.report.underruns += 1;
-        }
-        // Simulated plants run on machine time and do not mind a late wall clock: on an
-        // all-simulated machine only injected stalls (or an explicit limit) stop the run.
-        let counted = if self.enforce_wall_lateness {
-            late
-        } else {
-            injected
-        };
-        let limit = self.config.setpoint_lateness_limit();
-        if counted > limit && self.stopping.is_none() {
-            self.log.send(LogRecord::Underrun {
-                line: self.line,
-                late: counted,
-            });
-            let block = self.last_loc.and_then(|l| l.block);
-            self.begin_path_stop(
-                StopCause::Underrun {
-                    late: counted,
-                    limit,
-                },
-                None,
-                RunError::Underrun {
-                    late: counted,
-                    limit,
-                    line: self.line,
-                    block,
-                },
-            );
-        }
-        self.io.cycle(t)?;
-        self.record_cycle(t)?;
-        if let Some(i) = self.faulted_axis() {
-            return Err(self.axis_fault(i));
-        }
-        for i in 0..self.letters.len() {
-            if let Some(limit) = self.fe_limits[i] {
-                let e = self.reference[i] - self.actual[i];
-                if e.abs() > limit || e.is_nan() {
-                    return Err(RunError::Fault {
-                        axis: self.letters[i],
-                        fault: AxisFault::FollowingError(e),
-                        origin: None,
-                        line: self.line,
-                        block: self.last_loc.and_then(|l| l.block),
-                    });
-                }
-            }
-        }
-        if self.stopping.is_none()
-            && let Some(s) = self.io.spindle_mut()
-            && let Some(fault) = s.feedback().fault.clone()
-        {
-            let message = s.describe_fault(&fault);
-            self.log.send(LogRecord::SpindleFault { line: self.line });
-            self.begin_path_stop(
-                StopCause::Spindle(message.clone()),
-                None,
-                RunError::Spindle {
-                    message,
-                    line: self.line,
-                },
-            );
-        }
-        self.check_operator()
-    }
-
-    /// In realtime mode, sleeps until the deadline of the cycle due at machine time `t`
-    /// (see [`Pacer`]).
-    fn wait_until(&mut self, t: f64) {
-        if self.report.realtime {
-            self.wall_late = self.pacer.wait(t);
-        }
-    }
-
-    /// How late the setpoints of the cycle due at machine time `t` reach the axes, s: the
-    /// wall-clock delay in realtime mode, and any injected stall that strikes now (which a
-    /// realtime run also really waits out).
-    fn lateness(&mut self, t: f64) -> (f64, f64) {
-        let wall = if self.report.realtime {
-            self.wall_late.0
-        } else {
-            0.0
-        };
-        let mut late = 0.0;
-        while let Some(&(at, seconds)) = self.stalls.front() {
-            if at > t {
-                break;
-            }
-            self.stalls.pop_front();
-            if self.report.realtime {
-                std::thread::sleep(Duration::from_secs_f64(seconds));
-                self.pacer.delay(seconds);
-            }
-            late += seconds;
-        }
-        (wall, late)
-    }
-
-    /// Bookkeeping after a cycle: time, measured positions, figures, trace row.
-    fn record_cycle(&mut self, t: f64) -> Result<(), RunError> {
-        self.t = t;
-        self.report.cycles += 1;
-        self.report.machine_time = t;
-        for i in 0..self.commanded.len() {
-            let lagging = self.lags.get(i).is_some_and(|&l| l > 0);
-            self.reference[i] = if lagging {
-                self.last_sent[i]
-            } else {
-                self.commanded[i]
-            };
-            self.last_sent[i] = self.commanded[i];
-        }
-        for (i, f) in self.io.feedback().iter().enumerate() {
-            self.actual[i] = f.position;
-            let fe = f.following_error.abs();
-            if fe > self.report.max_following_error[i].1 {
-                self.report.max_following_error[i].1 = fe;
-            }
-        }
-        if let Some(tr) = self.trace.as_mut() {
-            let spindle = self
-                .io
-                .spindle_mut()
-                .map(|s| SpindleRow {
-                    rpm: s.commanded(),
-                    angle: s.feedback().position,
-                })
-                .unwrap_or_default();
-            tr.row(t, &self.commanded, &self.actual, spindle)?;
-        }
-        Ok(())
-    }
-
-    /// Sends one planner sample to the axes. Before the first sample of a new block, every
-    /// positioning axis must have reached its last commanded position.
-    fn apply_sample(&mut self, sample: &Sample) -> Result<(), RunError> {
-        if self.last_loc != Some(sample.loc) {
-            self.settle_all()?;
-            self.last_loc = Some(sample.loc);
-        }
-        self.line = sample.loc.line;
-        // The last line of defence: a setpoint the guard refuses never reaches a backend.
-        let t = sample.t + self.shift;
-        let positions =
-            self.command
-                .positions(sample, t)
-                .map_err(|violation| RunError::Setpoint {
-                    diagnostic: command::refused_in_run(self.path, sample.loc, &violation),
-                    violation,
-                })?;
-        for (c, &x) in self.commanded.iter_mut().zip(positions) {
-            *c = x;
-        }
-        self.command
-            .setpoints(sample, &self.commanded, self.io.setpoints_mut());
-        // Constant surface speed follows the radius of this cycle's setpoint.
-        self.follow_surface_speed()?;
-        self.servo_cycle(t)
-    }
-
-    /// One cycle holding the last commanded position; planner time stands still.
-    fn hold_cycle(&mut self) -> Result<(), RunError> {
-        self.io.hold();
-        self.command.repeat();
-        let period = self.config.servo_period;
-        self.shift += period;
-        self.servo_cycle(self.t + period)
-    }
-}
-
 /// Runs a program on a machine to its end.
 pub fn run_program(
     path: &Path,
@@ -439,32 +173,6 @@ pub fn run_program(
             Err(e) => return run.finish(Some(e)),
         }
     }
-}
-
-/// A snapshot of a run for displays.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct RunStatus {
-    /// Machine time, s.
-    pub t: f64,
-    /// Program line of the motion being executed (1-based; 0 before the first).
-    pub line: u32,
-    /// Commanded position per machine axis.
-    pub commanded: Vec<f64>,
-    /// Measured position per machine axis.
-    pub actual: Vec<f64>,
-    /// Following error per machine axis.
-    pub following_error: Vec<f64>,
-    /// True while a feed hold is active or asked for (from the request on, also while it
-    /// waits for the end of a geared pass and its retract).
-    pub held: bool,
-    /// Feed override factor (1.0 = 100 %).
-    pub feed_override: f64,
-    /// Path speed, mm/s.
-    pub path_speed: f64,
-    /// Spindle speed, rpm (signed), when the machine has a spindle.
-    pub spindle_rpm: Option<f64>,
-    /// Blocks executed so far.
-    pub blocks: u64,
 }
 
 impl<'a, 'w> Run<'a, 'w> {
@@ -924,70 +632,5 @@ impl<'a, 'w> Run<'a, 'w> {
         disabled.map_err(|e| fail(e.into()))?;
         trace_done.map_err(|e| fail(e.into()))?;
         Ok(report)
-    }
-
-    /// Moves ops from the reader into the planner while it wants more, waiting for them
-    /// when `wait`. Returns false when the planner wants more and the reader has none yet.
-    fn feed_planner(&mut self, wait: bool) -> bool {
-        while !self.input_done && self.planner.needs_input() {
-            if self.probing.is_some() {
-                // nothing comes before the probing move is measured
-                return false;
-            }
-            match self.reader.next(wait) {
-                None => return false,
-                Some(Feed::Probe(request, blank, blocks)) => {
-                    self.blocks = blocks;
-                    if let Err(e) = self.planner.end_in_stop() {
-                        self.stop_reading(RunError::Motion(e));
-                        return true;
-                    }
-                    self.probing = Some(probing::Probing::new(request, blank));
-                    return false;
-                }
-                Some(Feed::Op(op, blocks, basis)) => {
-                    self.blocks = blocks;
-                    if matches!(
-                        op.kind,
-                        OpKind::Line { .. } | OpKind::Arc { .. } | OpKind::Spline { .. }
-                    ) {
-                        self.warp.remember(op.loc, basis);
-                    }
-                    if let Err(e) = self.planner.push(op) {
-                        self.stop_reading(RunError::Motion(e));
-                    }
-                    // A spline block's coefficients are freed by the reader, not here.
-                    if let Some(spent) = self.planner.take_spent() {
-                        self.reader.give_back(spent);
-                    }
-                }
-                Some(Feed::Error(e, blocks)) => {
-                    self.blocks = self.blocks.max(blocks);
-                    self.stop_reading(e);
-                }
-                Some(Feed::End(blocks)) => {
-                    self.blocks = blocks;
-                    self.planner.finish();
-                    self.input_done = true;
-                }
-            }
-        }
-        true
-    }
-
-    /// Keeps an error met during a stop that goes on, for the log when the run finishes
-    /// (the first one: what follows from it adds nothing).
-    fn defer(&mut self, what: &'static str, error: RunError) {
-        if self.deferred.is_none() {
-            self.deferred = Some((what, error));
-        }
-    }
-
-    /// An error found while reading ahead: the motion of the blocks before it finishes, then
-    /// the run reports it.
-    fn stop_reading(&mut self, error: RunError) {
-        self.pending_error = Some(error);
-        self.planner.finish();
-        self.input_done = true;
     }
 }
