@@ -234,3 +234,33 @@ fn spline_blocks_do_not_allocate_in_the_servo_thread() {
         c.report.cycles
     );
 }
+
+/// Coolant switched on and off between the moves of a blended contour, after a line longer
+/// than the look-ahead (the blocks are taken in while the servo loop runs): each switch is
+/// an event that waits with the move before it for that move's corner.
+fn coolant_between_moves(moves: usize) -> String {
+    let mut p = String::from("0 BEGIN PGM EVENTS MM\n1 TOOL CALL 1 Z S2000\n");
+    p.push_str("2 L Z+5 R0 FMAX\n3 L X-250 Y+0 FMAX\n4 L Z-1 F3000\n5 L X+0 Y+0 F6000\n");
+    let mut n = 6;
+    for k in 1..=moves {
+        let y = if k % 2 == 1 { 2.0 } else { 0.0 };
+        p.push_str(&format!("{n} L X{:+.3} Y{y:+.3}\n", 2.0 * k as f64));
+        let m = if k % 2 == 1 { "M8" } else { "M9" };
+        p.push_str(&format!("{} {m}\n", n + 1));
+        n += 2;
+    }
+    p.push_str(&format!("{n} L Z+5 FMAX\n{} END PGM EVENTS MM\n", n + 1));
+    p
+}
+
+#[test]
+fn events_between_moves_do_not_allocate_in_the_servo_thread() {
+    let c = run_counted("events.h", &coolant_between_moves(60), false);
+    assert!(c.report.blocks > 120, "{} blocks", c.report.blocks);
+    assert_eq!(
+        (c.allocs, c.frees),
+        (0, 0),
+        "allocations and frees in the servo thread over {} cycles",
+        c.report.cycles
+    );
+}

@@ -179,18 +179,22 @@ impl Planner {
                 events_at = self.committed_end;
             }
         }
-        for op in front.events {
+        let mut events = front.events;
+        for op in events.drain(..) {
             self.markers.push_back(Marker::Event { at: events_at, op });
         }
+        self.give_back_event_list(events);
         // Elements a run used up: their events follow the run's blend.
         for _ in 0..done.consumed {
             if let Some(w) = self.waiting.pop_front() {
-                for op in w.events {
+                let mut events = w.events;
+                for op in events.drain(..) {
                     self.markers.push_back(Marker::Event {
                         at: self.committed_end,
                         op,
                     });
                 }
+                self.give_back_event_list(events);
             }
         }
         if done.stop_at_end && !(flushing && self.waiting.is_empty()) {

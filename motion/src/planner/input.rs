@@ -183,6 +183,7 @@ impl Planner {
         piece_limits(&bounds, segment.length(), feed, &limits, Headroom::Ample)
             .map_err(|e| piece_error(e, loc))?;
         self.planned_pose = segment.end();
+        let events = self.take_event_list();
         self.waiting.push_back(Waiting {
             element: Element {
                 segment,
@@ -194,7 +195,7 @@ impl Planner {
                 // Nothing waits only where the path ends in a stop (or has not started).
                 from_rest: self.waiting.is_empty(),
             },
-            events: Vec::new(),
+            events,
         });
         if matches!(op.kind, OpKind::Spline { .. }) {
             // Its coefficients are on the heap: the caller may free them outside the loop.

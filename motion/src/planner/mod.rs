@@ -84,6 +84,10 @@ pub const PIECE_MARGIN: usize = 1024;
 /// makes room for when it is built (the pocket's window holds up to 64 limits).
 pub const RESERVED_LIMITS: usize = 512;
 
+/// Events (non-motion ops such as coolant or M functions) between two moves each spare
+/// event list has room for; more grow that list once.
+const EVENTS_PER_ELEMENT: usize = 8;
+
 /// Largest gap (mm or degrees) accepted between an op's start and the previous end point.
 /// The planner always continues from its own end point, so accepted gaps do not jump.
 pub const CONTINUITY_TOLERANCE: f64 = 1e-6;
@@ -213,6 +217,10 @@ pub struct Planner {
     /// The last spline op taken in, kept for the caller to free elsewhere
     /// ([`Planner::take_spent`]).
     spent: Option<Op>,
+    /// Empty event lists with room made when the planner is built, handed to waiting
+    /// elements and taken back once their events are queued, so that events between moves
+    /// do not allocate in the servo loop.
+    spare_events: Vec<Vec<Op>>,
 }
 
 impl Planner {
@@ -290,6 +298,7 @@ impl Planner {
             blends: BlendPool::new(BLEND_SLOTS),
             splines: SplinePool::new(SPLINE_SLOTS),
             spent: None,
+            spare_events: Vec::new(),
         };
         planner.reserve();
         Ok(planner)
@@ -309,6 +318,24 @@ impl Planner {
         self.scratch.reserve(RESERVED_LIMITS);
         self.settled.reserve(RESERVED_LIMITS);
         self.low_ahead.reserve(RESERVED_LIMITS);
+        self.spare_events.reserve(RESERVED_LIMITS);
+        for _ in 0..RESERVED_LIMITS {
+            self.spare_events
+                .push(Vec::with_capacity(EVENTS_PER_ELEMENT));
+        }
+    }
+
+    /// An empty event list for a new waiting element: a spare one when there is one.
+    fn take_event_list(&mut self) -> Vec<Op> {
+        self.spare_events.pop().unwrap_or_default()
+    }
+
+    /// Takes back the event list of an element whose events are queued (emptied here).
+    fn give_back_event_list(&mut self, mut list: Vec<Op>) {
+        list.clear();
+        if list.capacity() > 0 && self.spare_events.len() < self.spare_events.capacity() {
+            self.spare_events.push(list);
+        }
     }
 
     /// Tells the planner where the table axes of a table-table machine are: moves that turn
