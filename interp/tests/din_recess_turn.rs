@@ -4,8 +4,13 @@
 use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
 
 fn program() -> String {
+    read("recess_turn_g869.nc")
+}
+
+fn read(name: &str) -> String {
     let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe/recess_turn_g869.nc");
+        .join("../programs/lathe")
+        .join(name);
     std::fs::read_to_string(p).unwrap()
 }
 
@@ -293,4 +298,107 @@ fn g869_refuses_more_levels_than_it_cuts() {
         .filter(|c| c.0 == Feed::PerRevolution(0.05))
         .count();
     assert_eq!(plunges, 2000);
+}
+
+#[test]
+fn g869_inside_a_bore_comes_from_the_axis() {
+    let ops = run_text(&read("recess_turn_g869_inside.nc")).unwrap();
+    // bore Ø20 (r10), recess Z-20..-36 out to Ø30 (r15); the tool starts at X10 (r5), below
+    // the section's lowest point, so it cuts from the inside: depth 5 with P2 → ceil(2.5)
+    // = 3 levels of 5/3 outwards: r11.667, 13.333, 15. SB4 with its +Z corner from Z-20 to
+    // Z-32. The safety distance is 1 mm inside the bore: r9.
+    let (f, o, e) = (
+        Feed::PerRevolution(0.1),
+        Feed::PerRevolution(0.05),
+        Feed::PerRevolution(0.04),
+    );
+    let (l1, l2) = (10.0 + 5.0 / 3.0, 10.0 + 10.0 / 3.0);
+    let want = [
+        (RAPID, [-20.0, 5.0]),
+        (RAPID, [-20.0, 9.0]),
+        (o, [-20.0, l1]),
+        (f, [-32.0, l1]),
+        (o, [-32.0, l2]),
+        (f, [-20.0, l2]),
+        (o, [-20.0, 15.0]),
+        (f, [-32.0, 15.0]),
+        (RAPID, [-32.0, 9.0]),
+        // finishing starts at the NS end: back to Z-20 at the safety distance, then out
+        // along the wall, along the recess's floor, back in
+        (RAPID, [-20.0, 9.0]),
+        (e, [-20.0, 15.0]),
+        (e, [-32.0, 15.0]),
+        (e, [-32.0, 9.0]),
+        // in along X to where it started, then back along Z
+        (RAPID, [-32.0, 5.0]),
+        (RAPID, [5.0, 5.0]),
+    ];
+    check(&moves(&ops, 23), &want);
+}
+
+#[test]
+fn g869_inside_keeps_the_x_limit_and_refuses_a_start_between() {
+    let text = read("recess_turn_g869_inside.nc");
+    // X28: no cut beyond r14 → depth 4 with P2: 2 levels, r12 and r14
+    let ops = run_text(&text.replace("N23 G869 NS3", "N23 G869 X28 Q1 NS3")).unwrap();
+    let plunges: Vec<f64> = moves(&ops, 23)
+        .iter()
+        .filter(|c| c.0 == Feed::PerRevolution(0.05))
+        .map(|c| c.2[1])
+        .collect();
+    assert_eq!(plunges, [12.0, 14.0]);
+    // X24 (r12) lies between the bore (r10) and the recess's floor (r15)
+    let e = run_text(&text.replace("N22 G0 X10 Z5", "N22 G0 X24 Z5")).unwrap_err();
+    assert!(e.contains("below the area's top X30.000"), "{e}");
+    assert!(e.starts_with("t.nc:17:"), "{e}");
+}
+
+#[test]
+fn g869_on_a_face_plunges_along_z_and_turns_along_x() {
+    let ops = run_text(&read("recess_turn_g869_face.nc")).unwrap();
+    // face recess from r10 to r18, 6 deep (Z0 → Z-6); SB3 along X with the reference
+    // corner at its +X end: from r13 to r18. Depth 6 with P2.5 → ceil(2.4) = 3 levels of
+    // 2: Z-2, -4, -6. Start X40 Z5 (r20); safety distance Z1. The section runs from r10
+    // (NS) towards r18, so the first plunge is at r13.
+    let (f, o, e) = (
+        Feed::PerRevolution(0.1),
+        Feed::PerRevolution(0.05),
+        Feed::PerRevolution(0.04),
+    );
+    let want = [
+        (RAPID, [5.0, 13.0]),
+        (RAPID, [1.0, 13.0]),
+        (o, [-2.0, 13.0]),
+        (f, [-2.0, 18.0]),
+        (o, [-4.0, 18.0]),
+        (f, [-4.0, 13.0]),
+        (o, [-6.0, 13.0]),
+        (f, [-6.0, 18.0]),
+        (RAPID, [1.0, 18.0]),
+        // finishing from the NS end: down the inner wall, along the floor, up the outer
+        (RAPID, [1.0, 13.0]),
+        (e, [-6.0, 13.0]),
+        (e, [-6.0, 18.0]),
+        (e, [1.0, 18.0]),
+        // axial: out along Z first, then along X to the start
+        (RAPID, [5.0, 18.0]),
+        (RAPID, [5.0, 20.0]),
+    ];
+    check(&moves(&ops, 23), &want);
+}
+
+#[test]
+fn g869_on_a_face_the_z_limit_bounds_the_depth() {
+    let text = read("recess_turn_g869_face.nc");
+    // Z-5: depth 5 with P2.5 → 2 levels, Z-2.5 and Z-5
+    let ops = run_text(&text.replace("N23 G869 NS3", "N23 G869 Z-5 Q1 NS3")).unwrap();
+    let plunges: Vec<[f64; 2]> = moves(&ops, 23)
+        .iter()
+        .filter(|c| c.0 == Feed::PerRevolution(0.05))
+        .map(|c| c.2)
+        .collect();
+    assert_eq!(plunges, [[-2.5, 13.0], [-5.0, 18.0]]);
+    // a tool standing in front of the face's top but inside the material's Z range
+    let e = run_text(&text.replace("N22 G0 X40 Z5", "N22 G0 X40 Z-3")).unwrap_err();
+    assert!(e.contains("starts at Z-3.000"), "{e}");
 }
