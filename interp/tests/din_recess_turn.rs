@@ -402,3 +402,26 @@ fn g869_on_a_face_the_z_limit_bounds_the_depth() {
     let e = run_text(&text.replace("N22 G0 X40 Z5", "N22 G0 X40 Z-3")).unwrap_err();
     assert!(e.contains("starts at Z-3.000"), "{e}");
 }
+
+#[test]
+fn g869_h2_stops_at_the_safety_distance() {
+    let text = program();
+    let h0 = moves(&run_text(&text).unwrap(), 23);
+    let h2 = moves(
+        &run_text(&text.replace("N23 G869 NS4", "N23 G869 H2 NS4")).unwrap(),
+        23,
+    );
+    // the same cuts; the last one ends at the safety distance r26 above Z-36 and the two
+    // retraction moves (out to r27, back to Z5) are left out
+    assert_eq!(h2.len(), h0.len() - 2, "{h2:?}");
+    assert_eq!(h2[..], h0[..h0.len() - 2]);
+    assert_eq!(h2.last().map(|m| m.2), Some([-36.0, 26.0]));
+    // inside, H2 ends in the bore at the safety distance r9 above Z-32
+    let inside = read("recess_turn_g869_inside.nc").replace("N23 G869 NS3", "N23 G869 H2 NS3");
+    let m = moves(&run_text(&inside).unwrap(), 23);
+    assert_eq!(m.last().map(|m| m.2), Some([-32.0, 9.0]));
+    let e = run_text(&text.replace("N23 G869 NS4", "N23 G869 H1 NS4")).unwrap_err();
+    assert!(e.contains("H1"), "{e}");
+    let e = run_text(&text.replace("N23 G869 NS4", "N23 G869 H3 NS4")).unwrap_err();
+    assert!(e.contains("expected 0, 1 or 2"), "{e}");
+}

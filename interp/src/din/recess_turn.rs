@@ -49,10 +49,13 @@
 //!   distance above T down to the lowest reachable point at the NS end, along the contour
 //!   under the tool's width to the NE end and up again, at the finishing feed.
 //! - At the end (H0) the tool moves out in X to where it started, then along Z to the start
-//!   point. It must start outside the area: at or above T.
+//!   point. It must start outside the area: at or above T. With H2 it stays where the last
+//!   cut left it at the safety distance (the manual: retract to the safety clearance and
+//!   stop).
 //!
-//! Not supported: the turning depth compensation R, the width offset B, approach/departure angles A/W, H1/H2, NS = NE written out (the
-//! reversed direction), auxiliary contours ID.
+//! Not supported: the turning depth compensation R, the width offset B, approach/departure
+//! angles A/W, H1 (in front of the finished contour), NS = NE written out (the reversed
+//! direction), auxiliary contours ID.
 
 use std::collections::VecDeque;
 
@@ -101,6 +104,8 @@ pub(crate) struct RecessTurn {
     pub plunge: Feed,
     /// E: the finishing feed.
     pub finish: Feed,
+    /// H2: the cycle ends at the safety distance where its last cut ended.
+    pub stop_at_safety: bool,
 }
 
 /// A feed word other than F (O, E) in the active feed unit, or `default`.
@@ -134,7 +139,7 @@ fn positive(g: &Group<'_>, addr: &str, what: &'static str) -> Result<f64, ExecEr
 /// Reads the words of G869 (NS/NE are read by the caller).
 pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, ExecError> {
     let here = g.g_word.map(|w| w.pos as u32);
-    for addr in ["R", "B", "H"] {
+    for addr in ["R", "B"] {
         if let Some(w) = g.get(addr)
             && num(w)? != 0.0
         {
@@ -144,6 +149,27 @@ pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, Exe
             ));
         }
     }
+    let stop_at_safety = match g.get("H") {
+        None => false,
+        Some(w) => {
+            let v = num(w)?;
+            if v == 1.0 {
+                return Err(err_at(
+                    w,
+                    ProgramError::NotSupported(
+                        "G869 H1 (positioning in front of the finished contour)".into(),
+                    ),
+                ));
+            }
+            if v != 0.0 && v != 2.0 {
+                return Err(err_at(
+                    w,
+                    ProgramError::OutOfRange(format!("G869 H{v}: expected 0, 1 or 2")),
+                ));
+            }
+            v == 2.0
+        }
+    };
     for addr in ["A", "W"] {
         if let Some(w) = g.get(addr) {
             return Err(err_at(
@@ -196,6 +222,7 @@ pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, Exe
         feed,
         plunge: other_feed(lathe, g, "O", feed)?,
         finish: other_feed(lathe, g, "E", feed)?,
+        stop_at_safety,
     })
 }
 
@@ -627,6 +654,9 @@ fn cut(
         }
         let z = frame.here(lathe)[0];
         go(lathe, z, above, c.finish, out);
+    }
+    if c.stop_at_safety {
+        return Ok(());
     }
     let z = frame.here(lathe)[0];
     go(lathe, z, clear, Feed::Rapid, out);
