@@ -425,3 +425,68 @@ fn g869_h2_stops_at_the_safety_distance() {
     let e = run_text(&text.replace("N23 G869 NS4", "N23 G869 H3 NS4")).unwrap_err();
     assert!(e.contains("expected 0, 1 or 2"), "{e}");
 }
+
+/// A bore Ø20 with a recess from Z-20 to Z-36 whose floor is an arc of radius 10 about
+/// (Z-28, r9), bulging outwards to r19 at Z-28; `arc` is the arc block.
+fn arc_bore(arc: &str) -> String {
+    format!(
+        "FINISHED PART\nN1 G0 X20 Z0\nN2 G1 Z-20\nN3 G1 X30\n{arc}\nN5 G1 X20\nN6 G1 Z-60\n\
+         MACHINING\nN20 T4\nN21 G97 S500 G95 F0.1 M3\nN22 G0 X10 Z5\n\
+         N23 G869 NS3 NE5 SB4 P1.5 K0.2 O0.05 E0.04\nN24 M30\n"
+    )
+}
+
+/// The bore's radius at `z` (the material lies outside it).
+fn arc_bore_r(z: f64) -> f64 {
+    if (-36.0..=-20.0).contains(&z) {
+        9.0 + (100.0 - (z + 28.0).powi(2)).sqrt()
+    } else {
+        10.0
+    }
+}
+
+#[test]
+fn g869_inside_on_an_arc_floor_stays_off_the_material() {
+    // which of G2/G3 bulges outwards is a property of the contour code; find it by the
+    // cuts going beyond r18.5 (the other one bulges inwards, no deeper than r15, and
+    // leaves two valleys, which G869 refuses)
+    let runs: Vec<Vec<Op>> = ["N4 G2 X30 Z-36 R10", "N4 G3 X30 Z-36 R10"]
+        .iter()
+        .filter_map(|a| run_text(&arc_bore(a)).ok())
+        .collect();
+    assert_eq!(runs.len(), 1);
+    let ops = runs
+        .iter()
+        .find(|ops| moves(ops, 23).iter().any(|m| m.2[1] > 18.5))
+        .expect("one arc direction bulges outwards");
+    let m = moves(ops, 23);
+    // roughing: with K0.2 the window is z−4.2 … z+0.2; the deepest reach is where it is
+    // centred on the arc's top: z = −28 + 2, window −30.2 … −25.8, r = 9 + √(100 − 2.2²)
+    let bottom = 9.0 + (100.0f64 - 2.2 * 2.2).sqrt();
+    let plunges: Vec<f64> = m
+        .iter()
+        .filter(|c| c.0 == Feed::PerRevolution(0.05))
+        .map(|c| c.2[1])
+        .collect();
+    let n = ((bottom - 10.0) / 1.5).ceil();
+    assert_eq!(plunges.len() as f64, n, "{plunges:?}");
+    assert!(
+        (plunges[plunges.len() - 1] - bottom).abs() < 1e-6,
+        "{plunges:?}"
+    );
+    // no point of any move puts the tool (its +Z corner at p, 4 wide, its outer edge at
+    // p's radius) beyond the bore's surface under its width
+    for (_, from, to) in &m {
+        for k in 0..=50 {
+            let t = f64::from(k) / 50.0;
+            let p = [
+                from[0] + t * (to[0] - from[0]),
+                from[1] + t * (to[1] - from[1]),
+            ];
+            let wall = (1..200)
+                .map(|i| arc_bore_r(p[0] - 4.0 * f64::from(i) / 200.0))
+                .fold(f64::INFINITY, f64::min);
+            assert!(p[1] <= wall + 1e-6, "{p:?} cuts into the material");
+        }
+    }
+}
