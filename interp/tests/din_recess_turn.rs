@@ -490,3 +490,38 @@ fn g869_inside_on_an_arc_floor_stays_off_the_material() {
         }
     }
 }
+
+#[test]
+fn g869_on_a_rear_face_comes_from_minus_z() {
+    // a collar's rear face at Z-30 with a ring recess into it from r18 down to r10, 6 deep
+    // (to Z-24); the tool stands at Z-40, behind the face, so it plunges along +Z. SB3
+    // along X, reference corner at the +X end: r13 … r18; 3 levels of 2: Z-28, -26, -24;
+    // safety distance Z-31. The section runs from r18 (NS) towards r10.
+    let text = "FINISHED PART\nN1 G0 X20 Z0\nN2 G1 X60\nN3 G1 Z-30\nN4 G1 X36\n\
+                N5 G1 Z-24\nN6 G1 X20\nN7 G1 Z-30\nN8 G1 X0\nMACHINING\nN20 T4\n\
+                N21 G97 S500 G95 F0.1 M3\nN22 G0 X40 Z-40\n\
+                N23 G869 NS5 NE7 SB3 P2.5 O0.05 E0.04\nN24 M30\n";
+    let (f, o, e) = (
+        Feed::PerRevolution(0.1),
+        Feed::PerRevolution(0.05),
+        Feed::PerRevolution(0.04),
+    );
+    let want = [
+        (RAPID, [-40.0, 18.0]),
+        (RAPID, [-31.0, 18.0]),
+        (o, [-28.0, 18.0]),
+        (f, [-28.0, 13.0]),
+        (o, [-26.0, 13.0]),
+        (f, [-26.0, 18.0]),
+        (o, [-24.0, 18.0]),
+        (f, [-24.0, 13.0]),
+        (RAPID, [-31.0, 13.0]),
+        (RAPID, [-31.0, 18.0]),
+        (e, [-24.0, 18.0]),
+        (e, [-24.0, 13.0]),
+        (e, [-31.0, 13.0]),
+        (RAPID, [-40.0, 13.0]),
+        (RAPID, [-40.0, 20.0]),
+    ];
+    check(&moves(&run_text(text).unwrap(), 23), &want);
+}

@@ -21,7 +21,8 @@
 //!   the same way with Z and X exchanged: plunges along Z, turning passes along X, the
 //!   tool's width along X with its reference corner at the +X end, I/K still the X/Z
 //!   oversizes, the Z limit bounds the depth and the X limit the passes, and the
-//!   retraction at the end runs first along Z, then along X.
+//!   retraction at the end runs first along Z, then along X. A tool standing behind the
+//!   section (below its lowest Z) cuts a rear face, plunging along +Z.
 //!
 //! - The manual's G869 has no word for the cutting width: its `P` is the largest infeed
 //!   (unlike G860/G866/G870, whose `P` is the cutting width) and `B` the offset width; the
