@@ -8,22 +8,24 @@
 //! (0 rough and finish, 1 rough only, 2 finish only), `U` the turning direction (0 both
 //! ways, 1 always from NS towards NE), `O` the recessing feed and `E` the finishing feed
 //! (both default: the active feed), `H` the retraction at the end (0: back to the start
-//! point, radially X first, then Z).
+//! point, radially X first, then Z, axially Z first; 1: in front of the finished contour;
+//! 2: at the safety clearance). The control tells radial from axial by the tool.
 //!
-//! klar's cuts (radial recess turning, outside, inside or on a face):
+//! klar's cuts (radial on an outside or inside contour, axial on a front or rear face):
 //!
 //! - Outside or inside: a tool that starts at or above the section's highest point cuts it
 //!   from outside; one that starts at or below its lowest point (in the bore) cuts it from
 //!   inside, the same cycle mirrored in X: levels go outwards, the safety distance and the
 //!   retraction lie towards the axis. Between the two the cycle refuses to start. Below,
-//!   "up" means away from the material, towards where the tool stands.
-//! - Axial: a section that spans more along X than along Z (a recess in a face) is cut
+//!   "up" means away from the material, towards where the tool stands (and axially X and
+//!   Z read exchanged).
+//! - Axial: klar's tools carry no orientation, so, as with G860, a section that spans more
+//!   along X than along Z from its first point to its last (a recess in a face) is cut
 //!   the same way with Z and X exchanged: plunges along Z, turning passes along X, the
 //!   tool's width along X with its reference corner at the +X end, I/K still the X/Z
 //!   oversizes, the Z limit bounds the depth and the X limit the passes, and the
 //!   retraction at the end runs first along Z, then along X. A tool standing behind the
 //!   section (below its lowest Z) cuts a rear face, plunging along +Z.
-//!
 //! - The manual's G869 has no word for the cutting width: its `P` is the largest infeed
 //!   (unlike G860/G866/G870, whose `P` is the cutting width) and `B` the offset width; the
 //!   control takes the width from the tool table. Tools carry no cutting width in klar's
@@ -50,7 +52,7 @@
 //!   distance above T down to the lowest reachable point at the NS end, along the contour
 //!   under the tool's width to the NE end and up again, at the finishing feed.
 //! - At the end (H0) the tool moves out in X to where it started, then along Z to the start
-//!   point. It must start outside the area: at or above T. With H2 it stays where the last
+//!   point. It must start outside the area (at or above T). With H2 it stays where the last
 //!   cut left it at the safety distance (the manual: retract to the safety clearance and
 //!   stop).
 //!
