@@ -269,8 +269,6 @@ fn g869_errors_name_what_is_wrong() {
     assert!(e.contains("largest infeed P"), "{e}");
     let e = with("N23 G869 NS4 SB30 P3").unwrap_err();
     assert!(e.contains("narrower than SB30"), "{e}");
-    let e = with("N23 G869 NS7 NE7 SB3 P3").unwrap_err();
-    assert!(e.contains("NS = NE"), "{e}");
     let e = with("N23 G869 NS4 SB4 P3 B1").unwrap_err();
     assert!(e.contains("not supported") || e.contains("G869 B"), "{e}");
     let e = with("N23 G869 NS4 SB4 P-3").unwrap_err();
@@ -524,4 +522,43 @@ fn g869_on_a_rear_face_comes_from_minus_z() {
         (RAPID, [-40.0, 20.0]),
     ];
     check(&moves(&run_text(text).unwrap(), 23), &want);
+}
+
+#[test]
+fn g869_ns_equal_ne_runs_the_element_backwards() {
+    // N3 alone: a slope from r30 at Z-10 down to r24 at Z-22, r = 30 + (z + 10)/2. SB2:
+    // standing at z the tool reaches r(z), from Z-20 (r25) to Z-10. Depth 5 with P3: r27.5
+    // (Z-20 … -15) and r25 (Z-20 only). Start X64 Z5 (r32), safety r31.
+    let at = |cycle: &str| {
+        let t = format!(
+            "FINISHED PART\nN1 G0 X60 Z0\nN2 G1 Z-10\nN3 G1 X48 Z-22\nN4 G1 Z-40\n\
+             MACHINING\nN20 T4\nN21 G97 S500 G95 F0.1 M3\nN22 G0 X64 Z5\n{cycle}\nN24 M30\n"
+        );
+        moves(&run_text(&t).unwrap(), 23)
+    };
+    let f = Feed::PerRevolution(0.1);
+    // NS3 alone: the element runs towards −Z, the first plunge at its +Z end
+    let forward = at("N23 G869 NS3 SB2 P3");
+    let first = forward[0].2;
+    assert!(
+        (first[0] + 15.0).abs() < 1e-8 && first[1] == 32.0,
+        "{forward:?}"
+    );
+    // NS3 NE3: against its direction, from Z-22 towards Z-10: first plunge at Z-20
+    let want = [
+        (RAPID, [-20.0, 32.0]),
+        (RAPID, [-20.0, 31.0]),
+        (f, [-20.0, 27.5]),
+        (f, [-15.0, 27.5]),
+        (f, [-20.0, 27.5]),
+        (f, [-20.0, 25.0]),
+        (RAPID, [-20.0, 31.0]),
+        // finishing from the new NS end (Z-20) up the slope
+        (f, [-20.0, 25.0]),
+        (f, [-10.0, 30.0]),
+        (f, [-10.0, 31.0]),
+        (RAPID, [-10.0, 32.0]),
+        (RAPID, [5.0, 32.0]),
+    ];
+    check(&at("N23 G869 NS3 NE3 SB2 P3"), &want);
 }

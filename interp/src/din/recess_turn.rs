@@ -7,7 +7,8 @@
 //! `K` the oversizes in X and Z, `X` (diameter) and `Z` cutting limits, `Q` the sequence
 //! (0 rough and finish, 1 rough only, 2 finish only), `U` the turning direction (0 both
 //! ways, 1 always from NS towards NE), `O` the recessing feed and `E` the finishing feed
-//! (both default: the active feed), `H` the retraction at the end (0: back to the start
+//! (both default: the active feed), `NS` = `NE` the one element against its programmed
+//! direction (so the first plunge is at its other end), `H` the retraction at the end (0: back to the start
 //! point, radially X first, then Z, axially Z first; 1: in front of the finished contour;
 //! 2: at the safety clearance). The control tells radial from axial by the tool.
 //!
@@ -57,8 +58,7 @@
 //!   stop).
 //!
 //! Not supported: the turning depth compensation R, the width offset B, approach/departure
-//! angles A/W, H1 (in front of the finished contour), NS = NE written out (the reversed
-//! direction), auxiliary contours ID.
+//! angles A/W, H1 (in front of the finished contour), auxiliary contours ID.
 
 use std::collections::VecDeque;
 
@@ -413,6 +413,27 @@ impl Frame {
     fn here(&self, lathe: &Lathe) -> [f64; 2] {
         self.inward([lathe.pos[AxisLetter::Z], lathe.pos[AxisLetter::X]])
     }
+}
+
+/// The section run the other way: last element first, each from its end to its start.
+pub(crate) fn reversed(segs: &[Seg]) -> Vec<Seg> {
+    segs.iter()
+        .rev()
+        .map(|s| match *s {
+            Seg::Line { a, b } => Seg::Line { a: b, b: a },
+            Seg::Arc {
+                a,
+                b,
+                centre,
+                sweep,
+            } => Seg::Arc {
+                a: b,
+                b: a,
+                centre,
+                sweep: -sweep,
+            },
+        })
+        .collect()
 }
 
 /// Runs G869 over the contour elements `segs` (in their programmed order) from where the
