@@ -11,7 +11,7 @@ use crate::din::cycles;
 use crate::din::facemill;
 use crate::din::grooving;
 use crate::din::lateral;
-use crate::din::lathe::{Group, err_at, num};
+use crate::din::lathe::{Group, num};
 use crate::din::roughing;
 use crate::op::{AxisLetter, Op, SourceLoc};
 use crate::tnc::exec::ExecError;
