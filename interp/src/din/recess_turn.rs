@@ -7,11 +7,26 @@
 //! `K` the oversizes in X and Z, `X` (diameter) and `Z` cutting limits, `Q` the sequence
 //! (0 rough and finish, 1 rough only, 2 finish only), `U` the turning direction (0 both
 //! ways, 1 always from NS towards NE), `O` the recessing feed and `E` the finishing feed
-//! (both default: the active feed), `H` the retraction at the end (0: back to the start
-//! point, radially X first, then Z).
+//! (both default: the active feed), `NS` = `NE` the one element against its programmed
+//! direction (so the first plunge is at its other end), `H` the retraction at the end (0: back to the start
+//! point, radially X first, then Z, axially Z first; 1: in front of the finished contour;
+//! 2: at the safety clearance). The control tells radial from axial by the tool.
 //!
-//! klar's cuts (radial recess turning on an outside contour):
+//! klar's cuts (radial on an outside or inside contour, axial on a front or rear face):
 //!
+//! - Outside or inside: a tool that starts at or above the section's highest point cuts it
+//!   from outside; one that starts at or below its lowest point (in the bore) cuts it from
+//!   inside, the same cycle mirrored in X: levels go outwards, the safety distance and the
+//!   retraction lie towards the axis. Between the two the cycle refuses to start. Below,
+//!   "up" means away from the material, towards where the tool stands (and axially X and
+//!   Z read exchanged).
+//! - Axial: klar's tools carry no orientation, so, as with G860, a section that spans more
+//!   along X than along Z from its first point to its last (a recess in a face) is cut
+//!   the same way with Z and X exchanged: plunges along Z, turning passes along X, the
+//!   tool's width along X with its reference corner at the +X end, I/K still the X/Z
+//!   oversizes, the Z limit bounds the depth and the X limit the passes, and the
+//!   retraction at the end runs first along Z, then along X. A tool standing behind the
+//!   section (below its lowest Z) cuts a rear face, plunging along +Z.
 //! - The manual's G869 has no word for the cutting width: its `P` is the largest infeed
 //!   (unlike G860/G866/G870, whose `P` is the cutting width) and `B` the offset width; the
 //!   control takes the width from the tool table. Tools carry no cutting width in klar's
@@ -38,11 +53,12 @@
 //!   distance above T down to the lowest reachable point at the NS end, along the contour
 //!   under the tool's width to the NE end and up again, at the finishing feed.
 //! - At the end (H0) the tool moves out in X to where it started, then along Z to the start
-//!   point. It must start outside the area: at or above T.
+//!   point. It must start outside the area (at or above T). With H2 it stays where the last
+//!   cut left it at the safety distance (the manual: retract to the safety clearance and
+//!   stop).
 //!
-//! Not supported: inside (bore) and axial recess turning, the turning depth compensation
-//! R, the width offset B, approach/departure angles A/W, H1/H2, NS = NE written out (the
-//! reversed direction), auxiliary contours ID.
+//! Not supported: the turning depth compensation R, the width offset B, approach/departure
+//! angles A/W, H1 (in front of the finished contour), auxiliary contours ID.
 
 use std::collections::VecDeque;
 
@@ -50,7 +66,7 @@ use super::contour::Seg;
 use super::grooving::SAFETY;
 use super::lathe::{Group, Lathe, err_at, num};
 use crate::diag::ProgramError;
-use crate::op::{AxisLetter, Feed, Op, Pose, SourceLoc};
+use crate::op::{AxisLetter, Feed, Op, SourceLoc};
 use crate::tnc::exec::ExecError;
 
 /// The words a G869 block takes.
@@ -91,6 +107,8 @@ pub(crate) struct RecessTurn {
     pub plunge: Feed,
     /// E: the finishing feed.
     pub finish: Feed,
+    /// H2: the cycle ends at the safety distance where its last cut ended.
+    pub stop_at_safety: bool,
 }
 
 /// A feed word other than F (O, E) in the active feed unit, or `default`.
@@ -124,7 +142,7 @@ fn positive(g: &Group<'_>, addr: &str, what: &'static str) -> Result<f64, ExecEr
 /// Reads the words of G869 (NS/NE are read by the caller).
 pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, ExecError> {
     let here = g.g_word.map(|w| w.pos as u32);
-    for addr in ["R", "B", "H"] {
+    for addr in ["R", "B"] {
         if let Some(w) = g.get(addr)
             && num(w)? != 0.0
         {
@@ -134,6 +152,27 @@ pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, Exe
             ));
         }
     }
+    let stop_at_safety = match g.get("H") {
+        None => false,
+        Some(w) => {
+            let v = num(w)?;
+            if v == 1.0 {
+                return Err(err_at(
+                    w,
+                    ProgramError::NotSupported(
+                        "G869 H1 (positioning in front of the finished contour)".into(),
+                    ),
+                ));
+            }
+            if v != 0.0 && v != 2.0 {
+                return Err(err_at(
+                    w,
+                    ProgramError::OutOfRange(format!("G869 H{v}: expected 0, 1 or 2")),
+                ));
+            }
+            v == 2.0
+        }
+    };
     for addr in ["A", "W"] {
         if let Some(w) = g.get(addr) {
             return Err(err_at(
@@ -186,6 +225,7 @@ pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, Exe
         feed,
         plunge: other_feed(lathe, g, "O", feed)?,
         finish: other_feed(lathe, g, "E", feed)?,
+        stop_at_safety,
     })
 }
 
@@ -236,6 +276,8 @@ struct Area<'a> {
     /// Places where the reach changes its course: corners and corners shifted by the
     /// window, inside the range, ascending.
     stops: Vec<f64>,
+    /// How the cycle's plane lies in the turning plane (for messages).
+    frame: Frame,
 }
 
 impl Area<'_> {
@@ -269,14 +311,14 @@ impl Area<'_> {
         let last = ok.iter().rposition(|o| *o);
         let (Some(i), Some(j)) = (first, last) else {
             return Err(ProgramError::Geometry(format!(
-                "G869: no place reaches X{:.3}",
-                x * 2.0
+                "G869: no place reaches {}",
+                self.frame.depth(x)
             )));
         };
         if ok.get(i..=j).is_some_and(|s| s.iter().any(|o| !*o)) {
             return Err(ProgramError::NotSupported(format!(
-                "G869 on a contour whose level X{:.3} splits into several valleys",
-                x * 2.0
+                "G869 on a contour whose level {} splits into several valleys",
+                self.frame.depth(x)
             )));
         }
         let edge = |inside: f64, outside: Option<f64>| match outside {
@@ -311,12 +353,87 @@ impl Area<'_> {
     }
 }
 
-/// A pose with the turning-plane point (z, x radius), other axes from `base`.
-fn pose(z: f64, x: f64, base: Pose) -> Pose {
-    let mut b = base;
-    b[AxisLetter::Z] = z;
-    b[AxisLetter::X] = x;
-    b
+/// How the cycle's own plane (u along the contour, v the depth the tool plunges against)
+/// lies in the turning plane (z, x radius): radial cuts have u = z, axial cuts u = x; an
+/// inside (or rear face) cut mirrors v, so that the tool always comes from high v.
+#[derive(Debug, Clone, Copy)]
+struct Frame {
+    /// u is the radius, v is Z.
+    axial: bool,
+    /// −1: the tool comes from the low side of the depth axis (a bore or a rear face).
+    sign: f64,
+}
+
+impl Frame {
+    /// The cycle's (u, v) of a turning-plane point (z, x radius).
+    fn inward(&self, q: [f64; 2]) -> [f64; 2] {
+        let [u, v] = if self.axial { [q[1], q[0]] } else { q };
+        [u, v * self.sign]
+    }
+
+    /// The turning-plane point (z, x radius) of the cycle's (u, v).
+    fn outward(&self, q: [f64; 2]) -> [f64; 2] {
+        let q = [q[0], q[1] * self.sign];
+        if self.axial { [q[1], q[0]] } else { q }
+    }
+
+    /// The element in the cycle's plane; every mirror turns arcs the other way.
+    fn seg(&self, s: &Seg) -> Seg {
+        let flips = u8::from(self.axial) + u8::from(self.sign < 0.0);
+        let turn = if flips == 1 { -1.0 } else { 1.0 };
+        match *s {
+            Seg::Line { a, b } => Seg::Line {
+                a: self.inward(a),
+                b: self.inward(b),
+            },
+            Seg::Arc {
+                a,
+                b,
+                centre,
+                sweep,
+            } => Seg::Arc {
+                a: self.inward(a),
+                b: self.inward(b),
+                centre: self.inward(centre),
+                sweep: sweep * turn,
+            },
+        }
+    }
+
+    /// A depth `v` as the program writes it (X as a diameter, or Z).
+    fn depth(&self, v: f64) -> String {
+        if self.axial {
+            format!("Z{:.3}", v * self.sign)
+        } else {
+            format!("X{:.3}", v * self.sign * 2.0)
+        }
+    }
+
+    /// Where the tool stands, in the cycle's plane.
+    fn here(&self, lathe: &Lathe) -> [f64; 2] {
+        self.inward([lathe.pos[AxisLetter::Z], lathe.pos[AxisLetter::X]])
+    }
+}
+
+/// The section run the other way: last element first, each from its end to its start.
+pub(crate) fn reversed(segs: &[Seg]) -> Vec<Seg> {
+    segs.iter()
+        .rev()
+        .map(|s| match *s {
+            Seg::Line { a, b } => Seg::Line { a: b, b: a },
+            Seg::Arc {
+                a,
+                b,
+                centre,
+                sweep,
+            } => Seg::Arc {
+                a: b,
+                b: a,
+                centre,
+                sweep: -sweep,
+            },
+        })
+        .collect()
 }
 
 /// Runs G869 over the contour elements `segs` (in their programmed order) from where the
@@ -328,35 +445,98 @@ pub(crate) fn run(
     loc: SourceLoc,
     out: &mut VecDeque<Op>,
 ) -> Result<(), ProgramError> {
+    if segs.is_empty() {
+        return Err(ProgramError::Missing(
+            "G869 needs a FINISHED PART contour (with elements from NS to NE)",
+        ));
+    }
+    let axial = super::grooving::is_axial(segs);
+    // outside (tool above the section's top) or inside (below its bottom)
+    let plain = Frame { axial, sign: 1.0 };
+    let vs: Vec<f64> = segs
+        .iter()
+        .map(|s| plain.seg(s))
+        .flat_map(|s| s.samples())
+        .map(|q| q[1])
+        .collect();
+    let top = vs.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let bottom = vs.iter().copied().fold(f64::INFINITY, f64::min);
+    let stand = plain.here(lathe)[1];
+    let sign = if stand >= top - 1e-9 {
+        1.0
+    } else if stand <= bottom + 1e-9 {
+        -1.0
+    } else {
+        return Err(ProgramError::Geometry(format!(
+            "G869 starts at {}, below the area's top {} and above its bottom {}: stand outside it",
+            plain.depth(stand),
+            plain.depth(top),
+            plain.depth(bottom)
+        )));
+    };
+    let frame = Frame { axial, sign };
+    let segs: Vec<Seg> = segs.iter().map(|s| frame.seg(s)).collect();
+    // oversizes along u and v; the limits: the depth one on v, the other on u
+    let (allowance, v_limit, u_limit) = if axial {
+        (
+            [c.allowance[1], c.allowance[0]],
+            c.z_limit.map(|z| z * sign),
+            c.x_limit,
+        )
+    } else {
+        (c.allowance, c.x_limit.map(|x| x * sign), c.z_limit)
+    };
+    cut(
+        lathe,
+        &segs,
+        c,
+        frame,
+        [allowance, [0.0, 0.0]],
+        (v_limit, u_limit),
+        loc,
+        out,
+    )
+}
+
+/// The cycle in its own plane: `segs` are in (u, v), `a[0]` the oversizes along u and v,
+/// `lim` the depth limit (v) and the limit along u.
+#[allow(clippy::too_many_arguments)]
+fn cut(
+    lathe: &mut Lathe,
+    segs: &[Seg],
+    c: &RecessTurn,
+    frame: Frame,
+    a: [[f64; 2]; 2],
+    lim: (Option<f64>, Option<f64>),
+    loc: SourceLoc,
+    out: &mut VecDeque<Op>,
+) -> Result<(), ProgramError> {
     let (Some(first), Some(last)) = (segs.first(), segs.last()) else {
         return Err(ProgramError::Missing(
             "G869 needs a FINISHED PART contour (with elements from NS to NE)",
         ));
     };
-    if super::grooving::is_axial(segs) {
-        return Err(ProgramError::NotSupported(
-            "axial G869 (a section that spans more along X than along Z)".into(),
-        ));
-    }
+    let allowance = a[0];
+    let (x_limit, z_limit) = lim;
     let ends = |s: &Seg| match *s {
         Seg::Line { a, b } | Seg::Arc { a, b, .. } => (a, b),
     };
-    // the direction the section runs along Z: the first plunge at its NS end
+    // the direction the section runs along u: the first plunge at its NS end
     let towards_minus = ends(first).0[0] >= ends(last).1[0];
     let pts: Vec<[f64; 2]> = segs.iter().flat_map(Seg::samples).collect();
     let zmin = pts.iter().map(|q| q[0]).fold(f64::INFINITY, f64::min);
     let zmax = pts.iter().map(|q| q[0]).fold(f64::NEG_INFINITY, f64::max);
     let top = pts.iter().map(|q| q[1]).fold(f64::NEG_INFINITY, f64::max);
-    let lo_edge = c.z_limit.map_or(zmin, |z| z.max(zmin));
-    let range = [lo_edge + c.width + c.allowance[0], zmax - c.allowance[0]];
+    let lo_edge = z_limit.map_or(zmin, |z| z.max(zmin));
+    let range = [lo_edge + c.width + allowance[0], zmax - allowance[0]];
     if range[1] < range[0] - 1e-9 {
         return Err(ProgramError::Geometry(format!(
-            "G869: the section ({:.3} mm along Z) is narrower than SB{} with the oversize K",
+            "G869: the section ({:.3} mm across) is narrower than SB{} with the oversize",
             zmax - lo_edge,
             c.width
         )));
     }
-    let corner_shifts = [0.0, c.width, c.allowance[0] + c.width, -c.allowance[0]];
+    let corner_shifts = [0.0, c.width, allowance[0] + c.width, -allowance[0]];
     let mut stops: Vec<f64> = pts
         .iter()
         .flat_map(|q| corner_shifts.map(|s| q[0] + s))
@@ -368,24 +548,21 @@ pub(crate) fn run(
     let area = Area {
         segs,
         width: c.width,
-        allowance: c.allowance,
+        allowance,
         top,
         range,
         stops,
+        frame,
     };
-    let start = [lathe.pos[AxisLetter::Z], lathe.pos[AxisLetter::X]];
-    if start[1] < top - 1e-9 {
-        return Err(ProgramError::Geometry(format!(
-            "G869 starts at X{:.3}, below the area's top X{:.3}: stand outside it",
-            start[1] * 2.0,
-            top * 2.0
-        )));
-    }
+    let start = frame.here(lathe);
     let clear = start[1];
     let above = (top + SAFETY).min(clear);
     // the NS end and the NE end of a stretch
     let ns_end = |s: [f64; 2]| if towards_minus { s[1] } else { s[0] };
     let ne_end = |s: [f64; 2]| if towards_minus { s[0] } else { s[1] };
+    let go = |lathe: &mut Lathe, z: f64, x: f64, feed: Feed, out: &mut VecDeque<Op>| {
+        go(lathe, frame, z, x, feed, loc, out)
+    };
 
     if c.variant != 2 {
         let probes = area.probes();
@@ -394,11 +571,12 @@ pub(crate) fn run(
             .iter()
             .copied()
             .fold(f64::INFINITY, f64::min)
-            .max(c.x_limit.unwrap_or(f64::NEG_INFINITY));
+            .max(x_limit.unwrap_or(f64::NEG_INFINITY));
         let depth = top - bottom;
         if depth <= 1e-9 {
             return Err(ProgramError::Geometry(
-                "G869: nothing to cut between the section's top and its floor with the oversizes (inside recesses are not supported)".into(),
+                "G869: nothing to cut between the section's top and its floor with the oversizes"
+                    .into(),
             ));
         }
         let n = (depth / c.infeed - 1e-9).ceil().max(1.0);
@@ -423,26 +601,26 @@ pub(crate) fn run(
             .map(|x| area.stretch(&probes, &reach, *x))
             .collect::<Result<Vec<_>, _>>()?;
         let z0 = ns_end(stretches[0]);
-        go(lathe, z0, clear, Feed::Rapid, loc, out);
+        go(lathe, z0, clear, Feed::Rapid, out);
         let mut prev = top;
         for (k, (x, s)) in levels.iter().zip(&stretches).enumerate() {
-            let mut z = lathe.pos[AxisLetter::Z];
+            let mut z = frame.here(lathe)[0];
             if k == 0 || c.one_way {
                 if k > 0 {
-                    go(lathe, z, above, Feed::Rapid, loc, out);
+                    go(lathe, z, above, Feed::Rapid, out);
                     z = ns_end(*s);
                 }
-                go(lathe, z, above, Feed::Rapid, loc, out);
+                go(lathe, z, above, Feed::Rapid, out);
                 let down = (prev + SAFETY).min(above);
-                go(lathe, z, down, Feed::Rapid, loc, out);
+                go(lathe, z, down, Feed::Rapid, out);
             } else {
                 let inside = z.clamp(s[0], s[1]);
                 if (inside - z).abs() > 1e-12 {
-                    go(lathe, inside, prev, c.feed, loc, out);
+                    go(lathe, inside, prev, c.feed, out);
                     z = inside;
                 }
             }
-            go(lathe, z, *x, c.plunge, loc, out);
+            go(lathe, z, *x, c.plunge, out);
             let to = if c.one_way {
                 ne_end(*s)
             } else if (z - s[0]).abs() >= (z - s[1]).abs() {
@@ -451,18 +629,18 @@ pub(crate) fn run(
                 s[1]
             };
             if (to - z).abs() > 1e-12 {
-                go(lathe, to, *x, c.feed, loc, out);
+                go(lathe, to, *x, c.feed, out);
             }
             prev = *x;
         }
-        let z = lathe.pos[AxisLetter::Z];
-        go(lathe, z, above, Feed::Rapid, loc, out);
+        let z = frame.here(lathe)[0];
+        go(lathe, z, above, Feed::Rapid, out);
     }
 
     if c.variant != 1 {
         let floor = |z: f64| {
             area.reach_with(z, [0.0, 0.0])
-                .max(c.x_limit.unwrap_or(f64::NEG_INFINITY))
+                .max(x_limit.unwrap_or(f64::NEG_INFINITY))
         };
         // the places where the finishing path changes its course, in its direction
         let span = [lo_edge + c.width, zmax];
@@ -481,35 +659,49 @@ pub(crate) fn run(
             1.0
         };
         let z0 = path.first().copied().unwrap_or(span[1]);
-        let x_now = lathe.pos[AxisLetter::X];
-        go(lathe, z0, x_now, Feed::Rapid, loc, out);
-        go(lathe, z0, above, Feed::Rapid, loc, out);
+        let x_now = frame.here(lathe)[1];
+        go(lathe, z0, x_now, Feed::Rapid, out);
+        go(lathe, z0, above, Feed::Rapid, out);
         let last = path.len().saturating_sub(1);
         for (i, z) in path.into_iter().enumerate() {
             // a step of the contour on either side of this place: along it here
             let at = floor(z);
             let before = floor(z - dir * 1e-7);
             if i > 0 && (before - at).abs() > 1e-6 {
-                go(lathe, z, before, c.finish, loc, out);
+                go(lathe, z, before, c.finish, out);
             }
-            go(lathe, z, at, c.finish, loc, out);
+            go(lathe, z, at, c.finish, out);
             let after = floor(z + dir * 1e-7);
             if i < last && (after - at).abs() > 1e-6 {
-                go(lathe, z, after, c.finish, loc, out);
+                go(lathe, z, after, c.finish, out);
             }
         }
-        let z = lathe.pos[AxisLetter::Z];
-        go(lathe, z, above, c.finish, loc, out);
+        let z = frame.here(lathe)[0];
+        go(lathe, z, above, c.finish, out);
     }
-    let z = lathe.pos[AxisLetter::Z];
-    go(lathe, z, clear, Feed::Rapid, loc, out);
-    go(lathe, start[0], clear, Feed::Rapid, loc, out);
+    if c.stop_at_safety {
+        return Ok(());
+    }
+    let z = frame.here(lathe)[0];
+    go(lathe, z, clear, Feed::Rapid, out);
+    go(lathe, start[0], clear, Feed::Rapid, out);
     Ok(())
 }
 
-/// Moves to (z, x radius) unless the tool stands there already.
-fn go(lathe: &mut Lathe, z: f64, x: f64, feed: Feed, loc: SourceLoc, out: &mut VecDeque<Op>) {
-    let to = pose(z, x, lathe.pos);
+/// Moves to the cycle's point (u, v) unless the tool stands there already.
+fn go(
+    lathe: &mut Lathe,
+    frame: Frame,
+    u: f64,
+    v: f64,
+    feed: Feed,
+    loc: SourceLoc,
+    out: &mut VecDeque<Op>,
+) {
+    let [z, x] = frame.outward([u, v]);
+    let mut to = lathe.pos;
+    to[AxisLetter::Z] = z;
+    to[AxisLetter::X] = x;
     if to != lathe.pos {
         lathe.line(to, feed, loc, out);
     }

@@ -11,7 +11,7 @@ use crate::din::cycles;
 use crate::din::facemill;
 use crate::din::grooving;
 use crate::din::lateral;
-use crate::din::lathe::{Group, err_at, num};
+use crate::din::lathe::{Group, num};
 use crate::din::roughing;
 use crate::op::{AxisLetter, Op, SourceLoc};
 use crate::tnc::exec::ExecError;
@@ -180,20 +180,15 @@ impl DinExec {
             869 => {
                 Self::check_words(g, &crate::din::recess_turn::G869_WORDS[..], "G869")?;
                 let ns = g.get("NS").map(|w| whole(w, "NS")).transpose()?;
-                if let (Some(w), Some(n)) = (g.get("NE"), ns)
-                    && whole(w, "NE")? == n
-                {
-                    return Err(err_at(
-                        w,
-                        ProgramError::NotSupported(
-                            "G869 with NS = NE (the element against its direction)".into(),
-                        ),
-                    ));
-                }
                 let ne = g.get("NE").map(|w| whole(w, "NE")).transpose()?;
+                // NS = NE: the one element against its programmed direction
+                let against = ns.is_some() && ne == ns;
                 let (ns, ne) = (ns.map(u64::from), ne.map(u64::from).or(ns.map(u64::from)));
                 let p = crate::din::recess_turn::params(l, g)?;
-                let segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
+                let mut segs = self.contour.segments(ns, ne).map_err(|e| (gpos, e))?;
+                if against {
+                    segs = crate::din::recess_turn::reversed(&segs);
+                }
                 crate::din::recess_turn::run(l, &segs, &p, loc, out).map_err(|e| (gpos, e))?;
             }
             860 | 866 | 870 => {
