@@ -6,73 +6,28 @@
 
 use klar::config::MachineConfig;
 use klar::serve::session::{Command, MachineLoop, MachineState, SteppingHooks, idle_snapshot};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use tokio::sync::broadcast;
 
 mod common;
+#[path = "common/counting.rs"]
+mod counting;
 
-/// The system allocator, counting what the marked thread asks of it.
-struct Counting;
-
-thread_local! {
-    /// Set while the machine thread steps a run.
-    static MARKED: Cell<bool> = const { Cell::new(false) };
-}
-
+/// Allocations and frees the machine thread counted while it stepped, as of its last
+/// stepping hook.
 static ALLOCS: AtomicU64 = AtomicU64::new(0);
 static FREES: AtomicU64 = AtomicU64::new(0);
 
-fn marked() -> bool {
-    MARKED.try_with(Cell::get).unwrap_or(false)
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if marked() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
-        }
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        if marked() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
-        }
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if marked() {
-            ALLOCS.fetch_add(1, Ordering::Relaxed);
-        }
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        if marked() {
-            FREES.fetch_add(1, Ordering::Relaxed);
-        }
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
-
 fn begin() {
-    MARKED.with(|m| m.set(true));
+    counting::begin();
 }
 
 fn end() {
-    MARKED.with(|m| m.set(false));
+    counting::end();
+    let (allocs, frees) = counting::counts();
+    ALLOCS.store(allocs, Ordering::Relaxed);
+    FREES.store(frees, Ordering::Relaxed);
 }
 
 /// Lines, an arc and the spindle turning: every field of the snapshot changes. About two

@@ -9,68 +9,11 @@
 
 use klar::config::MachineConfig;
 use klar::runtime::{Run, RunOptions};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
 use std::io::Write;
 
 mod common;
-
-/// The system allocator, counting what the marked thread asks of it.
-struct Counting;
-
-thread_local! {
-    /// Set while the servo thread runs its loop.
-    static MARKED: Cell<bool> = const { Cell::new(false) };
-    /// Allocations (and reallocations) and frees of this thread while marked.
-    static ALLOCS: Cell<u64> = const { Cell::new(0) };
-    static FREES: Cell<u64> = const { Cell::new(0) };
-}
-
-fn marked() -> bool {
-    MARKED.try_with(Cell::get).unwrap_or(false)
-}
-
-fn bump(counter: &'static std::thread::LocalKey<Cell<u64>>) {
-    let _ = counter.try_with(|c| c.set(c.get() + 1));
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        if marked() {
-            bump(&ALLOCS);
-        }
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        if marked() {
-            bump(&ALLOCS);
-        }
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        if marked() {
-            bump(&ALLOCS);
-        }
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        if marked() {
-            bump(&FREES);
-        }
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "common/counting.rs"]
+mod counting;
 
 /// Lines at several feeds, corners blended within the path tolerance, full and partial arcs,
 /// a helix and rounded corners: every kind of segment the planner joins.
@@ -124,7 +67,7 @@ fn run_counted(name: &str, program: &str, realtime: bool) -> Counted {
             trace: Some(&mut writer as &mut dyn Write),
         };
         let mut run = Run::start(&path, &config, options).expect("the run starts");
-        MARKED.with(|m| m.set(true));
+        counting::begin();
         let ended = loop {
             match run.step() {
                 Ok(true) => {}
@@ -132,8 +75,8 @@ fn run_counted(name: &str, program: &str, realtime: bool) -> Counted {
                 Err(e) => break Some(e),
             }
         };
-        MARKED.with(|m| m.set(false));
-        let counts = (ALLOCS.with(Cell::get), FREES.with(Cell::get));
+        counting::end();
+        let counts = counting::counts();
         let report = run.finish(ended).map_err(|f| f.error.to_string());
         drop(writer);
         report.map(|r| (r, counts))

@@ -4,57 +4,10 @@
 
 use klar::config::MachineConfig;
 use klar::runtime::{Run, RunOptions};
-use std::alloc::{GlobalAlloc, Layout, System};
-use std::cell::Cell;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 mod common;
-
-/// The system allocator, counting what the marked thread asks of it.
-struct Counting;
-
-thread_local! {
-    /// Set around the calls being counted.
-    static MARKED: Cell<bool> = const { Cell::new(false) };
-}
-
-static EVENTS: AtomicU64 = AtomicU64::new(0);
-
-fn count() {
-    if MARKED.try_with(Cell::get).unwrap_or(false) {
-        EVENTS.fetch_add(1, Ordering::Relaxed);
-    }
-}
-
-// SAFETY: every call is forwarded unchanged to the system allocator.
-unsafe impl GlobalAlloc for Counting {
-    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.alloc(layout) }
-    }
-
-    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.alloc_zeroed(layout) }
-    }
-
-    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
-        count();
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.realloc(ptr, layout, new_size) }
-    }
-
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
-        count();
-        // SAFETY: the caller's contract is passed on.
-        unsafe { System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static GLOBAL: Counting = Counting;
+#[path = "common/counting.rs"]
+mod counting;
 
 /// Lines, an arc and the spindle turning: every field of the status changes.
 const PROGRAM: &str = "\
@@ -84,9 +37,9 @@ fn reading_the_status_every_cycle_allocates_nothing() {
     let (mut cycles, mut moved, mut turning) = (0u64, false, false);
     let ended = loop {
         let stepped = run.step();
-        MARKED.with(|m| m.set(true));
+        counting::begin();
         run.status_into(&mut status);
-        MARKED.with(|m| m.set(false));
+        counting::end();
         // The same as a status made anew.
         assert_eq!(status, run.status(), "cycle {cycles}");
         cycles += 1;
@@ -103,5 +56,5 @@ fn reading_the_status_every_cycle_allocates_nothing() {
         .expect("the run ends");
     assert!(cycles > 1000 && moved && turning, "{cycles} cycles");
     assert_eq!(status.commanded.len(), config.axes.len());
-    assert_eq!(EVENTS.load(Ordering::Relaxed), 0, "allocations or frees");
+    assert_eq!(counting::counts(), (0, 0), "allocations, frees");
 }
