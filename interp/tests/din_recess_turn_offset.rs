@@ -248,3 +248,40 @@ fn g869_b_refusals_name_the_word() {
     let zero = run_text(&text.replace("P2 B2", "P2 B0 U1")).unwrap();
     assert_eq!(moves(&plain, 23), moves(&zero, 23));
 }
+
+#[test]
+fn g869_b_on_a_face_shortens_along_x() {
+    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../programs/lathe/recess_turn_g869_face.nc");
+    let text = std::fs::read_to_string(p)
+        .unwrap()
+        .replace("SB3 P2.5", "SB3 P1.5 B0.5");
+    let ops = run_text(&text).unwrap();
+    // face ring recess r10 … r18, Z0 → Z-6, SB3 along X with its reference corner at the
+    // +X end: r13 (NS) … r18. P1.5: 4 levels Z-1.5, -3, -4.5, -6. The pass back to r13 on
+    // level 2 turns into a plunge: B0.5 short, at r13.5; the one on level 4 is the last and
+    // runs to r13. Left at r13: levels 2 and 3, cleared from Z-0.5 (1 above level 1) down
+    // to Z-4.5. Start X40 Z5, safety Z1.
+    let want = [
+        (RAPID, [5.0, 13.0]),
+        (RAPID, [1.0, 13.0]),
+        (O, [-1.5, 13.0]),
+        (F, [-1.5, 18.0]),
+        (O, [-3.0, 18.0]),
+        (F, [-3.0, 13.5]),
+        (O, [-4.5, 13.5]),
+        (F, [-4.5, 18.0]),
+        (O, [-6.0, 18.0]),
+        (F, [-6.0, 13.0]),
+        (RAPID, [1.0, 13.0]),
+        (RAPID, [-0.5, 13.0]),
+        (O, [-4.5, 13.0]),
+        (RAPID, [1.0, 13.0]),
+        (E, [-6.0, 13.0]),
+        (E, [-6.0, 18.0]),
+        (E, [1.0, 18.0]),
+        (RAPID, [5.0, 18.0]),
+        (RAPID, [5.0, 20.0]),
+    ];
+    check(&moves(&ops, 23), &want);
+}
