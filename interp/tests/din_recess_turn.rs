@@ -269,8 +269,8 @@ fn g869_errors_name_what_is_wrong() {
     assert!(e.contains("largest infeed P"), "{e}");
     let e = with("N23 G869 NS4 SB30 P3").unwrap_err();
     assert!(e.contains("narrower than SB30"), "{e}");
-    let e = with("N23 G869 NS4 SB4 P3 B1").unwrap_err();
-    assert!(e.contains("not supported") || e.contains("G869 B"), "{e}");
+    let e = with("N23 G869 NS4 SB4 P3 R0.1").unwrap_err();
+    assert!(e.contains("G869 R"), "{e}");
     let e = with("N23 G869 NS4 SB4 P-3").unwrap_err();
     assert!(e.contains("must be positive"), "{e}");
     let e = with("N23 G869 NS4 SB4 P3 Q3").unwrap_err();

@@ -22,6 +22,7 @@ pub(crate) mod lateral;
 pub(crate) mod lathe;
 pub(crate) mod parallel;
 pub mod pattern;
+pub(crate) mod recess_offset;
 pub(crate) mod recess_turn;
 pub(crate) mod roughing;
 pub(crate) mod run;

@@ -49,6 +49,10 @@
 //!   with U1 the tool lifts to the safety distance above T after each pass, returns to the
 //!   start side and comes down at rapid to the safety distance above the level just cut.
 //!   The first plunge is at the end of the area where the section begins (NS).
+//! - `B` (offset width, U0 only): from the second plunge on, each pass back to the NS end
+//!   that turns into a plunge stops short of it, by j·B the j-th time, never more than
+//!   0.8·SB; one cut at the NS end takes away what these passes left (see
+//!   `recess_offset`).
 //! - Finishing (Q0, Q2) follows the contour itself (without oversizes): from the safety
 //!   distance above T down to the lowest reachable point at the NS end, along the contour
 //!   under the tool's width to the NE end and up again, at the finishing feed.
@@ -57,14 +61,17 @@
 //!   cut left it at the safety distance (the manual: retract to the safety clearance and
 //!   stop).
 //!
-//! Not supported: the turning depth compensation R, the width offset B, approach/departure
-//! angles A/W, H1 (in front of the finished contour), auxiliary contours ID.
+//! Not supported: the turning depth compensation R (the manual names its purpose, the tool
+//! tip yielding while it turns, but not along which finishing moves it acts), approach and
+//! departure angles A/W (no reference direction given), H1 ("in front of the finished
+//! contour", no place given), auxiliary contours ID.
 
 use std::collections::VecDeque;
 
 use super::contour::Seg;
 use super::grooving::SAFETY;
 use super::lathe::{Group, Lathe, err_at, num};
+use super::recess_offset::{Offsets, Step, clean_up};
 use crate::diag::ProgramError;
 use crate::op::{AxisLetter, Feed, Op, SourceLoc};
 use crate::tnc::exec::ExecError;
@@ -109,6 +116,8 @@ pub(crate) struct RecessTurn {
     pub finish: Feed,
     /// H2: the cycle ends at the safety distance where its last cut ended.
     pub stop_at_safety: bool,
+    /// B: the offset width of the passes that turn into a plunge at the NS end (0: none).
+    pub offset: f64,
 }
 
 /// A feed word other than F (O, E) in the active feed unit, or `default`.
@@ -142,15 +151,17 @@ fn positive(g: &Group<'_>, addr: &str, what: &'static str) -> Result<f64, ExecEr
 /// Reads the words of G869 (NS/NE are read by the caller).
 pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, ExecError> {
     let here = g.g_word.map(|w| w.pos as u32);
-    for addr in ["R", "B"] {
-        if let Some(w) = g.get(addr)
-            && num(w)? != 0.0
-        {
-            return Err(err_at(
-                w,
-                ProgramError::NotSupported(format!("G869 {addr} other than 0")),
-            ));
-        }
+    if let Some(w) = g.get("R")
+        && num(w)? != 0.0
+    {
+        return Err(err_at(
+            w,
+            ProgramError::NotSupported(
+                "G869 R other than 0 (the turning depth compensation for finishing: the \
+                 manual does not say along which moves of the finishing pass it acts)"
+                    .into(),
+            ),
+        ));
     }
     let stop_at_safety = match g.get("H") {
         None => false,
@@ -204,6 +215,31 @@ pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, Exe
     };
     let variant = choice("Q", 2.0)?;
     let one_way = choice("U", 1.0)? == 1;
+    let offset = match g.get("B") {
+        None => 0.0,
+        Some(w) => {
+            let v = num(w)?;
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(err_at(
+                    w,
+                    ProgramError::OutOfRange(format!(
+                        "G869 offset width B{v} must not be negative"
+                    )),
+                ));
+            }
+            if v > 0.0 && one_way {
+                return Err(err_at(
+                    w,
+                    ProgramError::NotSupported(
+                        "G869 B with U1: one-way passes never turn into a plunge, where the \
+                         offset acts"
+                            .into(),
+                    ),
+                ));
+            }
+            v
+        }
+    };
     let allowance = [
         g.value("K")?.unwrap_or(0.0),
         g.value("I")?.unwrap_or(0.0) / 2.0,
@@ -226,6 +262,7 @@ pub(crate) fn params(lathe: &mut Lathe, g: &Group<'_>) -> Result<RecessTurn, Exe
         plunge: other_feed(lathe, g, "O", feed)?,
         finish: other_feed(lathe, g, "E", feed)?,
         stop_at_safety,
+        offset,
     })
 }
 
@@ -603,6 +640,10 @@ fn cut(
         let z0 = ns_end(stretches[0]);
         go(lathe, z0, clear, Feed::Rapid, out);
         let mut prev = top;
+        let mut offsets = Offsets::new(c.offset, c.width);
+        // from the NS end into the stretch
+        let inward = if towards_minus { -1.0 } else { 1.0 };
+        let mut left = vec![false; levels.len()];
         for (k, (x, s)) in levels.iter().zip(&stretches).enumerate() {
             let mut z = frame.here(lathe)[0];
             if k == 0 || c.one_way {
@@ -621,20 +662,40 @@ fn cut(
                 }
             }
             go(lathe, z, *x, c.plunge, out);
-            let to = if c.one_way {
+            // back and forth: even levels towards the NE end, odd ones back to the NS end,
+            // where a pass that turns into a plunge stops short by the offset B
+            let back = !c.one_way && k % 2 == 1;
+            let to = if !back {
                 ne_end(*s)
-            } else if (z - s[0]).abs() >= (z - s[1]).abs() {
-                s[0]
+            } else if offsets.active() && k + 1 < levels.len() {
+                let short = ns_end(*s) + inward * offsets.next();
+                // never beyond where the pass began
+                if (short - z) * inward >= 0.0 {
+                    z
+                } else {
+                    short
+                }
             } else {
-                s[1]
+                ns_end(*s)
             };
             if (to - z).abs() > 1e-12 {
                 go(lathe, to, *x, c.feed, out);
             }
+            left[k] =
+                offsets.active() && (z - ns_end(*s)).abs() > 1e-9 && (to - ns_end(*s)).abs() > 1e-9;
             prev = *x;
         }
         let z = frame.here(lathe)[0];
         go(lathe, z, above, Feed::Rapid, out);
+        let ns: Vec<f64> = stretches.iter().map(|s| ns_end(*s)).collect();
+        for (step, [u, v]) in clean_up(&levels, &ns, &left, above) {
+            let feed = match step {
+                Step::Rapid => Feed::Rapid,
+                Step::Plunge => c.plunge,
+                Step::Turn => c.feed,
+            };
+            go(lathe, u, v, feed, out);
+        }
     }
 
     if c.variant != 1 {
