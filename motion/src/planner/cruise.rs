@@ -7,8 +7,10 @@
 //! after a period the generator ended cruising, the planner works out how far the state may
 //! go on at that speed: up to twice the braking distance (with the limits' own acceleration
 //! and jerk) before every lower limit in the window, half the window's reach beyond which
-//! it has not looked, the point where the current piece could hand over to a faster next
-//! one (`Planner::go_target`), and four periods' travel short of each. Until then each
+//! it has not looked, the first piece ahead with another speed limit, the point where a
+//! piece could hand over to a faster next one (`Planner::go_target`), and four periods'
+//! travel short of each. Pieces with the same limit follow each other without a handover,
+//! so a cruise goes on over their joints (the short chords of CAM code). Until then each
 //! period moves the state on by `v·T`; a feed override, a feed hold or a new window ends it
 //! (the next period is the generator's again).
 
@@ -95,18 +97,35 @@ impl Planner {
                 until = until.min(l.at - 2.0 * brake);
             }
         }
-        // The handover to a faster next piece (`go_target`) starts within this reach of the
-        // current piece's end.
+        // The speed target (`go_target`) stays the speed held while the state is on pieces
+        // whose limit is that speed: the cruise may go on over the joints between them (dense
+        // code), and ends at the first piece with another limit (a lower one is a limit of
+        // the window, met above). The handover to a faster next piece starts within this
+        // reach of the end of the piece before it.
         let k = self.current_index();
-        if let Some(p) = self.pieces.get(k) {
-            let accel = p.grip.most();
-            let ease = if accel.is_finite() {
-                accel / p.jerk
-            } else {
-                0.0
-            };
-            let reach = (v + accel.min(1e12) * ease) * ease + 2.0 * v * self.config.period;
-            until = until.min(p.end() - reach);
+        for (i, p) in self.pieces.iter().enumerate().skip(k) {
+            if p.start >= until {
+                break;
+            }
+            if p.speed_limit(self.factor) != v {
+                until = until.min(p.start);
+                break;
+            }
+            let faster = self
+                .pieces
+                .get(i + 1)
+                .is_some_and(|q| q.speed_limit(self.factor) > v);
+            if faster {
+                let accel = p.grip.most();
+                let ease = if accel.is_finite() {
+                    accel / p.jerk
+                } else {
+                    0.0
+                };
+                let reach = (v + accel.min(1e12) * ease) * ease + 2.0 * v * self.config.period;
+                until = until.min(p.end() - reach);
+                break;
+            }
         }
         until -= margin;
         if until > next.s + v * self.config.period {
@@ -177,6 +196,38 @@ mod tests {
             with.len()
         );
         assert_eq!(none, 0);
+        assert_eq!(with, without);
+    }
+
+    #[test]
+    fn cruising_goes_on_over_the_joints_of_short_chords_at_one_feed() {
+        // 200 chords of 0.3 mm along X at 40 mm/s, then a turn into Y: each chord is shorter
+        // than the reach within which a piece could hand over to a faster one (about 0.58 mm
+        // at 40 mm/s with 1000 mm/s² and 1e5 mm/s³), so only cruising over the joints lets
+        // most periods skip the generator. The samples stay the generator's, bit for bit.
+        let mut ops = Vec::new();
+        for k in 0..200 {
+            let x = |k: i32| 0.3 * f64::from(k);
+            ops.push(line(
+                Pose::xyz(x(k), 0.0, 0.0),
+                Pose::xyz(x(k + 1), 0.0, 0.0),
+                40.0,
+            ));
+        }
+        ops.push(line(
+            Pose::xyz(60.0, 0.0, 0.0),
+            Pose::xyz(60.0, 30.0, 0.0),
+            40.0,
+        ));
+        let (with, cruised) = samples(&ops, false);
+        let (without, _) = samples(&ops, true);
+        // 90 mm at 40 mm/s: a little over 2.25 s.
+        assert!(with.len() > 2250, "{}", with.len());
+        assert!(
+            cruised > with.len() as u64 * 3 / 4,
+            "{cruised} of {}",
+            with.len()
+        );
         assert_eq!(with, without);
     }
 }
