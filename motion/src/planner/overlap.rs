@@ -1,0 +1,385 @@
+//! Crossing a stop corner without standing still.
+//!
+//! A sharp corner whose blend would crawl is an exact stop (see `corner_stop`): the path
+//! brakes to rest on the corner, then speeds up along the next element. Where the axes
+//! that brake are not the axes that start, the second motion may begin before the first
+//! has ended, as long as the tool stays within the corner's tolerance band: the samples
+//! of the last part of the braking and of the first part of the speeding up are added
+//! together (each as a displacement from the corner), and the time they overlap is saved.
+//!
+//! The rules, checked on the samples themselves:
+//! * **Turn.** The path turns by at most 150°: a line travelled back (a plunge and its
+//!   retract) reaches its end.
+//! * **Band.** Every combined sample is the braking's point plus the departure's offset
+//!   from the corner. Its distance from the programmed path is at most the braking's
+//!   remaining path length (the departure's point lies on the path) and at most the
+//!   departure's path length from the corner (the braking's point lies on the path): the
+//!   smaller of the two must be within the band.
+//! * **Axes.** Every axis keeps its velocity and acceleration limits at each combined
+//!   sample and its jerk limit over each period (the change of acceleration), from two
+//!   periods before the overlap to two after it. An axis that moves in only one of the two
+//!   motions follows that motion shifted in time, within its limits as planned; an axis
+//!   that moves in both (the slope of a finishing pass and the lift after it) gets the sum
+//!   of the two, which is checked.
+//!
+//! Nothing else changes: the braking and the departure are those the speed generator
+//! planned. The combination needs the samples of the departure before the end of the
+//! braking goes out, so as the path closes in on such a corner the planner steps ahead
+//! (a few dozen periods at most, in one call) and gives the combined samples out one per
+//! call. A feed hold asked for meanwhile acts after them; an event on the way (an op at
+//! the corner) gives the samples out as planned, without overlap.
+
+use super::{Marker, Planner, Sample, Step};
+use crate::config::AxisLimits;
+use std::collections::VecDeque;
+
+/// Samples of the braking the planner keeps back at most before the corner (more: the
+/// braking is given out as planned).
+const TAIL_SAMPLES: usize = 256;
+
+/// Samples of the departure taken at most to combine with the braking.
+const HEAD_SAMPLES: usize = 64;
+
+/// Periods of travel at the current speed, beyond the band, from which the planner starts
+/// keeping the braking's samples back (the departure's part within the band takes at most
+/// this many periods to overlap with the braking's part before the band).
+const LEAD_PERIODS: f64 = 48.0;
+
+/// Cosine of the sharpest turn that is overlapped (150°). A turn back on itself, or
+/// nearly, is crossed standing still: the path's far end (the bottom of a plunge, the end
+/// of a line before it is travelled back) must be reached, not cut short within the band.
+const REVERSAL_COSINE: f64 = -0.866;
+
+/// One sample kept back, with its path distance from the corner (left before it for the
+/// braking, travelled after it for the departure).
+#[derive(Debug, Clone, Copy)]
+struct Kept {
+    sample: Sample,
+    distance: f64,
+}
+
+/// Where the combination stands.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Phase {
+    /// No corner close.
+    Idle,
+    /// Braking into the corner at `at` (path position) with band `band`.
+    Braking { at: f64, band: f64 },
+    /// The planner stood on the corner and departs from it.
+    Departing { at: f64, band: f64 },
+}
+
+/// The state of the overlap at corners (see the module documentation).
+#[derive(Debug, Clone)]
+pub(super) struct Overlap {
+    phase: Phase,
+    tail: Vec<Kept>,
+    head: Vec<Kept>,
+    /// Steps ready to go out, oldest first.
+    out: VecDeque<Step>,
+    /// Set when the planner has passed the stop marker of the corner being braked for.
+    passed: bool,
+    /// Periods saved at corners so far.
+    saved: u64,
+}
+
+impl Default for Overlap {
+    fn default() -> Self {
+        Self {
+            phase: Phase::Idle,
+            tail: Vec::with_capacity(TAIL_SAMPLES),
+            head: Vec::with_capacity(HEAD_SAMPLES),
+            out: VecDeque::with_capacity(TAIL_SAMPLES + HEAD_SAMPLES + 2),
+            passed: false,
+            saved: 0,
+        }
+    }
+}
+
+impl Overlap {
+    /// True when nothing is kept back or waiting to go out.
+    pub(super) fn is_empty(&self) -> bool {
+        self.phase == Phase::Idle && self.out.is_empty()
+    }
+
+    /// Samples computed but not given out yet.
+    pub(super) fn samples_ahead(&self) -> u64 {
+        let waiting = self
+            .out
+            .iter()
+            .filter(|s| matches!(s, Step::Sample(_)))
+            .count();
+        (waiting + self.tail.len() + self.head.len()) as u64
+    }
+
+    /// The planner passed a stop marker at `at`.
+    pub(super) fn passed_stop(&mut self, at: f64) {
+        if let Phase::Braking { at: corner, .. } = self.phase
+            && (corner - at).abs() <= 1e-9
+        {
+            self.passed = true;
+        }
+    }
+
+    /// Periods saved at corners so far.
+    pub(super) fn saved_periods(&self) -> u64 {
+        self.saved
+    }
+
+    /// Gives out what was kept back unchanged, then `next` (if any).
+    fn give_out_as_planned(&mut self, next: Option<Step>) {
+        for k in self.tail.drain(..).chain(self.head.drain(..)) {
+            self.out.push_back(Step::Sample(k.sample));
+        }
+        if let Some(step) = next {
+            self.out.push_back(step);
+        }
+        self.phase = Phase::Idle;
+        self.passed = false;
+    }
+
+    /// The largest number of periods by which the departure may start before the braking
+    /// ends (see the module documentation), 0 when it may not.
+    fn best_shift(&self, band: f64, limits: &[Option<AxisLimits>; 9], period: f64) -> usize {
+        let Some(rest) = self.tail.last() else {
+            return 0;
+        };
+        // The braking must end at rest on the corner.
+        if rest.distance.abs() > 1e-9 || rest.sample.velocity.iter().any(|v| *v != 0.0) {
+            return 0;
+        }
+        let m = self.tail.len() - 1;
+        if self.turn_cosine() < REVERSAL_COSINE {
+            return 0;
+        }
+        let most = m.min(self.head.len());
+        (1..=most)
+            .rev()
+            .find(|&k| {
+                self.tail[m - k + 1..]
+                    .iter()
+                    .zip(&self.head)
+                    .all(|(b, d)| b.distance.min(d.distance) <= band)
+                    && self.keeps_limits(k, limits, period)
+            })
+            .unwrap_or(0)
+    }
+
+    /// Cosine of the turn at the corner: between the direction of the braking's last moving
+    /// sample and the departure's first (−1 when either has none).
+    fn turn_cosine(&self) -> f64 {
+        let moving = |k: &&Kept| k.sample.velocity.iter().any(|v| *v != 0.0);
+        let (Some(b), Some(d)) = (
+            self.tail.iter().rev().find(moving),
+            self.head.iter().find(moving),
+        ) else {
+            return -1.0;
+        };
+        let (u, w) = (&b.sample.velocity, &d.sample.velocity);
+        let dot: f64 = u.iter().zip(w).map(|(x, y)| x * y).sum();
+        let norm = |v: &[f64; 9]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+        dot / (norm(u) * norm(w))
+    }
+
+    /// The `n`-th sample given out when the departure starts `k` periods early (indexed as
+    /// the braking's samples, the departure's following them).
+    fn shifted(&self, k: usize, n: usize) -> Sample {
+        let m = self.tail.len() - 1;
+        let corner = self.tail[m].sample.pose.0;
+        if n + k <= m {
+            return self.tail[n].sample;
+        }
+        let d = self.head[n + k - m - 1].sample;
+        if n > m {
+            return d;
+        }
+        let mut s = self.tail[n].sample;
+        for i in 0..corner.len() {
+            s.pose.0[i] += d.pose.0[i] - corner[i];
+            s.velocity[i] += d.velocity[i];
+            s.acceleration[i] += d.acceleration[i];
+        }
+        s.loc = d.loc;
+        s
+    }
+
+    /// True when every axis keeps its limits over the samples the shift by `k` periods
+    /// changes, and over their neighbours: velocity and acceleration at each sample, jerk
+    /// as the change of acceleration over each period (the acceleration changes linearly
+    /// within a period of the speed generator). A limit the planned samples already reach
+    /// counts as that limit (rounding).
+    fn keeps_limits(&self, k: usize, limits: &[Option<AxisLimits>; 9], period: f64) -> bool {
+        let m = self.tail.len() - 1;
+        let from = (m + 1 - k).saturating_sub(2);
+        let to = (m + 2).min(self.tail.len() + self.head.len() - k - 1);
+        let planned = |n: usize| {
+            if n <= m {
+                self.tail[n].sample
+            } else {
+                self.head[n - m - 1].sample
+            }
+        };
+        let last = self.tail.len() + self.head.len() - 1;
+        for (i, axis) in limits.iter().enumerate() {
+            let Some(l) = axis else { continue };
+            // The planned samples' own peaks over the stretch (before the shift).
+            let (mut v, mut a, mut j) = (l.max_velocity, l.max_acceleration, l.max_jerk);
+            for n in from..=last.min(to + k) {
+                let s = planned(n);
+                v = v.max(s.velocity[i].abs());
+                a = a.max(s.acceleration[i].abs());
+                if n > from {
+                    let change = s.acceleration[i] - planned(n - 1).acceleration[i];
+                    j = j.max(change.abs() / period);
+                }
+            }
+            let (v, a, j) = (v * (1.0 + 1e-9), a * (1.0 + 1e-9), j * (1.0 + 1e-9));
+            let mut before: Option<Sample> = None;
+            for n in from..=to {
+                let s = self.shifted(k, n);
+                if s.velocity[i].abs() > v || s.acceleration[i].abs() > a {
+                    return false;
+                }
+                if let Some(b) = before
+                    && (s.acceleration[i] - b.acceleration[i]).abs() / period > j
+                {
+                    return false;
+                }
+                before = Some(s);
+            }
+        }
+        true
+    }
+
+    /// Combines the braking and the departure kept back, shifted by the best number of
+    /// periods, and queues the result (then `next`, if any). Returns the periods saved.
+    fn combine(
+        &mut self,
+        band: f64,
+        limits: &[Option<AxisLimits>; 9],
+        period: f64,
+        next: Option<Step>,
+    ) -> usize {
+        let k = self.best_shift(band, limits, period);
+        if k == 0 {
+            self.give_out_as_planned(next);
+            return 0;
+        }
+        let m = self.tail.len() - 1;
+        let shift = k as f64;
+        for n in 0..self.tail.len() + self.head.len() - k {
+            let mut s = self.shifted(k, n);
+            if n > m {
+                s.t = ((s.t / period).round() - shift) * period;
+            }
+            self.out.push_back(Step::Sample(s));
+        }
+        if let Some(step) = next {
+            self.out.push_back(step);
+        }
+        self.tail.clear();
+        self.head.clear();
+        self.phase = Phase::Idle;
+        self.passed = false;
+        self.saved += k as u64;
+        k
+    }
+}
+
+impl Planner {
+    /// The next step for the servo loop, with sharp corners crossed without standing still
+    /// where that is allowed (see the module documentation).
+    pub(super) fn overlapped_step(&mut self, starved: bool) -> Option<Step> {
+        loop {
+            if let Some(step) = self.overlap.out.pop_front() {
+                return Some(step);
+            }
+            let step = self.step(starved)?;
+            match self.overlap.phase {
+                Phase::Idle => {
+                    if let Step::Sample(sample) = &step
+                        && let Some((at, band)) = self.corner_close()
+                    {
+                        self.overlap.phase = Phase::Braking { at, band };
+                        self.overlap.tail.push(Kept {
+                            sample: *sample,
+                            distance: at - self.state.s,
+                        });
+                        continue;
+                    }
+                    return Some(step);
+                }
+                Phase::Braking { at, band } => match step {
+                    Step::Sample(sample) if self.overlap.passed => {
+                        self.overlap.phase = Phase::Departing { at, band };
+                        self.keep_departure(sample, at, band);
+                    }
+                    Step::Sample(sample) if self.overlap.tail.len() < TAIL_SAMPLES => {
+                        self.overlap.tail.push(Kept {
+                            sample,
+                            distance: at - self.state.s,
+                        });
+                    }
+                    other => self.overlap.give_out_as_planned(Some(other)),
+                },
+                Phase::Departing { at, band } => match step {
+                    Step::Sample(sample) => self.keep_departure(sample, at, band),
+                    event => self.end_overlap(band, Some(event)),
+                },
+            }
+        }
+    }
+
+    /// Keeps a sample of the departure from the corner at `at`; combines once more would
+    /// not help.
+    fn keep_departure(&mut self, sample: Sample, at: f64, band: f64) {
+        let distance = self.state.s - at;
+        self.overlap.head.push(Kept { sample, distance });
+        // Departure samples beyond the band pair only with braking samples within it.
+        let within = self
+            .overlap
+            .tail
+            .iter()
+            .filter(|k| k.distance <= band)
+            .count();
+        let beyond = self
+            .overlap
+            .head
+            .iter()
+            .filter(|k| k.distance > band)
+            .count();
+        if beyond >= within || self.overlap.head.len() >= HEAD_SAMPLES {
+            self.end_overlap(band, None);
+        }
+    }
+
+    /// Combines what was kept back; the planner's clock moves back by the periods saved.
+    fn end_overlap(&mut self, band: f64, next: Option<Step>) {
+        let saved = self
+            .overlap
+            .combine(band, &self.config.limits, self.config.period, next);
+        self.cycles -= saved as u64;
+    }
+
+    /// The corner ahead (path position and band) when the state closes in on a stop that
+    /// may be overlapped: the next marker is such a stop, no feed hold is asked for, TCPM is
+    /// off, and the stop is within the band plus [`LEAD_PERIODS`] periods' travel.
+    fn corner_close(&self) -> Option<(f64, f64)> {
+        if self.held || self.tcpm || self.hold_until.is_some() {
+            return None;
+        }
+        match self.markers.front() {
+            Some(Marker::Stop {
+                at,
+                op: None,
+                dwell,
+                band,
+            }) if *band > 0.0 && *dwell == 0.0 => {
+                let left = at - self.state.s;
+                let lead = LEAD_PERIODS * self.config.period * self.state.v;
+                (left > 0.0 && left <= band + lead).then_some((*at, *band))
+            }
+            _ => None,
+        }
+    }
+}
