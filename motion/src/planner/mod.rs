@@ -153,6 +153,15 @@ enum Marker {
     },
 }
 
+impl Marker {
+    /// The path position it takes effect at.
+    fn at(&self) -> f64 {
+        match self {
+            Marker::Event { at, .. } | Marker::Stop { at, .. } => *at,
+        }
+    }
+}
+
 /// The planner: takes ops, gives samples at the servo period.
 ///
 /// Call [`Planner::push`] while [`Planner::needs_input`] is true (or [`Planner::finish`] when

@@ -11,10 +11,10 @@
 //! * **Turn.** The path turns by at most 150°: a line travelled back (a plunge and its
 //!   retract) reaches its end.
 //! * **Band.** Every combined sample is the braking's point plus the departure's offset
-//!   from the corner. Its distance from the programmed path is at most the braking's
-//!   remaining path length (the departure's point lies on the path) and at most the
-//!   departure's path length from the corner (the braking's point lies on the path): the
-//!   smaller of the two must be within the band.
+//!   from the corner. Where the braking's point lies on a programmed element (not on a
+//!   blend), the combined sample lies within the departure's distance from the corner of
+//!   the contour; where the departure's point does, within the braking's distance. One of
+//!   the two must be within the band.
 //! * **Axes.** Every axis keeps its velocity and acceleration limits at each combined
 //!   sample and its jerk limit over each period (the change of acceleration), from two
 //!   periods before the overlap to two after it. An axis that moves in only one of the two
@@ -29,8 +29,10 @@
 //! call. A feed hold asked for meanwhile acts after them; an event on the way (an op at
 //! the corner) gives the samples out as planned, without overlap.
 
+use super::path::Shape;
 use super::{Marker, Planner, Sample, Step};
 use crate::config::AxisLimits;
+use klar_interp::Pose;
 use std::collections::VecDeque;
 
 /// Samples of the braking the planner keeps back at most before the corner (more: the
@@ -56,6 +58,9 @@ const REVERSAL_COSINE: f64 = -0.866;
 struct Kept {
     sample: Sample,
     distance: f64,
+    /// True when the sample lies on a programmed element (not on a blend, which may lie
+    /// anywhere within the band of the contour).
+    on_contour: bool,
 }
 
 /// Where the combination stands.
@@ -149,18 +154,20 @@ impl Overlap {
             return 0;
         }
         let m = self.tail.len() - 1;
+        let corner = rest.sample.pose;
         if self.turn_cosine() < REVERSAL_COSINE {
             return 0;
         }
-        let most = m.min(self.head.len());
+        // Three samples of the braking before the overlap stay as planned (the differences
+        // that judge the limits reach back over them).
+        let most = m.saturating_sub(3).min(self.head.len());
         (1..=most)
             .rev()
             .find(|&k| {
-                self.tail[m - k + 1..]
-                    .iter()
-                    .zip(&self.head)
-                    .all(|(b, d)| b.distance.min(d.distance) <= band)
-                    && self.keeps_limits(k, limits, period)
+                self.tail[m - k + 1..].iter().zip(&self.head).all(|(b, d)| {
+                    (b.on_contour && offset(d, &corner) <= band)
+                        || (d.on_contour && offset(b, &corner) <= band)
+                }) && self.keeps_limits(k, limits, period)
             })
             .unwrap_or(0)
     }
@@ -203,49 +210,35 @@ impl Overlap {
         s
     }
 
-    /// True when every axis keeps its limits over the samples the shift by `k` periods
-    /// changes, and over their neighbours: velocity and acceleration at each sample, jerk
-    /// as the change of acceleration over each period (the acceleration changes linearly
-    /// within a period of the speed generator). A limit the planned samples already reach
-    /// counts as that limit (rounding).
+    /// True when every axis keeps its limits where the shift by `k` periods changes the
+    /// samples given out, judged as a trace is: velocity, acceleration and jerk by the first,
+    /// second and third differences of the positions over the periods. A limit the planned
+    /// samples already reach there counts as that limit (rounding).
     fn keeps_limits(&self, k: usize, limits: &[Option<AxisLimits>; 9], period: f64) -> bool {
         let m = self.tail.len() - 1;
-        let from = (m + 1 - k).saturating_sub(2);
-        let to = (m + 2).min(self.tail.len() + self.head.len() - k - 1);
+        let total = self.tail.len() + self.head.len();
+        // Three samples before the first changed one, three after the braking's end.
+        let lo = m + 1 - k - 3;
+        let hi = (m + 3).min(total - k - 1);
         let planned = |n: usize| {
             if n <= m {
-                self.tail[n].sample
+                self.tail[n].sample.pose
             } else {
-                self.head[n - m - 1].sample
+                self.head[n - m - 1].sample.pose
             }
         };
-        let last = self.tail.len() + self.head.len() - 1;
         for (i, axis) in limits.iter().enumerate() {
             let Some(l) = axis else { continue };
-            // The planned samples' own peaks over the stretch (before the shift).
-            let (mut v, mut a, mut j) = (l.max_velocity, l.max_acceleration, l.max_jerk);
-            for n in from..=last.min(to + k) {
-                let s = planned(n);
-                v = v.max(s.velocity[i].abs());
-                a = a.max(s.acceleration[i].abs());
-                if n > from {
-                    let change = s.acceleration[i] - planned(n - 1).acceleration[i];
-                    j = j.max(change.abs() / period);
-                }
-            }
-            let (v, a, j) = (v * (1.0 + 1e-9), a * (1.0 + 1e-9), j * (1.0 + 1e-9));
-            let mut before: Option<Sample> = None;
-            for n in from..=to {
-                let s = self.shifted(k, n);
-                if s.velocity[i].abs() > v || s.acceleration[i].abs() > a {
+            let own = peaks(
+                (lo..=(hi + k).min(total - 1)).map(|n| planned(n).0[i]),
+                period,
+            );
+            let shifted = peaks((lo..=hi).map(|n| self.shifted(k, n).pose.0[i]), period);
+            let most = [l.max_velocity, l.max_acceleration, l.max_jerk];
+            for d in 0..3 {
+                if shifted[d] > most[d].max(own[d]) * (1.0 + 1e-9) {
                     return false;
                 }
-                if let Some(b) = before
-                    && (s.acceleration[i] - b.acceleration[i]).abs() / period > j
-                {
-                    return false;
-                }
-                before = Some(s);
             }
         }
         true
@@ -286,7 +279,47 @@ impl Overlap {
     }
 }
 
+/// Largest first, second and third differences of `x` over `period`, `period²` and
+/// `period³` (velocity, acceleration and jerk as a trace is judged).
+fn peaks(x: impl Iterator<Item = f64>, period: f64) -> [f64; 3] {
+    let mut out = [0.0f64; 3];
+    let mut w = [f64::NAN; 4];
+    for (n, v) in x.enumerate() {
+        w = [w[1], w[2], w[3], v];
+        if n >= 1 {
+            out[0] = out[0].max(((w[3] - w[2]) / period).abs());
+        }
+        if n >= 2 {
+            out[1] = out[1].max(((w[3] - 2.0 * w[2] + w[1]) / (period * period)).abs());
+        }
+        if n >= 3 {
+            let third = w[3] - 3.0 * w[2] + 3.0 * w[1] - w[0];
+            out[2] = out[2].max((third / (period * period * period)).abs());
+        }
+    }
+    out
+}
+
+/// Straight-line distance of a kept sample from the corner `c`.
+fn offset(k: &Kept, c: &Pose) -> f64 {
+    k.sample
+        .pose
+        .0
+        .iter()
+        .zip(&c.0)
+        .map(|(x, y)| (x - y) * (x - y))
+        .sum::<f64>()
+        .sqrt()
+}
+
 impl Planner {
+    /// True when the path state lies on a programmed element rather than on a blend.
+    fn on_contour(&self) -> bool {
+        self.pieces
+            .front()
+            .is_some_and(|p| matches!(p.shape, Shape::Element(_)))
+    }
+
     /// The next step for the servo loop, with sharp corners crossed without standing still
     /// where that is allowed (see the module documentation).
     pub(super) fn overlapped_step(&mut self, starved: bool) -> Option<Step> {
@@ -294,7 +327,26 @@ impl Planner {
             if let Some(step) = self.overlap.out.pop_front() {
                 return Some(step);
             }
-            let step = self.step(starved)?;
+            // While samples are kept back the path goes on with what is committed, as when
+            // the caller has no input to give: a caller that gives input whenever the planner
+            // asks for it before each call gets `None` only at the end, as without overlap.
+            // The look-ahead reaches far beyond the few dozen periods kept back.
+            let collecting = self.overlap.phase != Phase::Idle;
+            let Some(step) = self.step(starved || collecting) else {
+                // The path ended (a departure that ends the program): what was kept back
+                // goes out, combined where it may be.
+                if collecting {
+                    let band = match self.overlap.phase {
+                        Phase::Braking { band, .. } | Phase::Departing { band, .. } => band,
+                        Phase::Idle => 0.0,
+                    };
+                    self.end_overlap(band, None);
+                    if let Some(step) = self.overlap.out.pop_front() {
+                        return Some(step);
+                    }
+                }
+                return None;
+            };
             match self.overlap.phase {
                 Phase::Idle => {
                     if let Step::Sample(sample) = &step
@@ -304,6 +356,7 @@ impl Planner {
                         self.overlap.tail.push(Kept {
                             sample: *sample,
                             distance: at - self.state.s,
+                            on_contour: self.on_contour(),
                         });
                         continue;
                     }
@@ -318,6 +371,7 @@ impl Planner {
                         self.overlap.tail.push(Kept {
                             sample,
                             distance: at - self.state.s,
+                            on_contour: self.on_contour(),
                         });
                     }
                     other => self.overlap.give_out_as_planned(Some(other)),
@@ -334,7 +388,12 @@ impl Planner {
     /// not help.
     fn keep_departure(&mut self, sample: Sample, at: f64, band: f64) {
         let distance = self.state.s - at;
-        self.overlap.head.push(Kept { sample, distance });
+        let on_contour = self.on_contour();
+        self.overlap.head.push(Kept {
+            sample,
+            distance,
+            on_contour,
+        });
         // Departure samples beyond the band pair only with braking samples within it.
         let within = self
             .overlap
@@ -363,9 +422,9 @@ impl Planner {
 
     /// The corner ahead (path position and band) when the state closes in on a stop that
     /// may be overlapped: the next marker is such a stop, no feed hold is asked for, TCPM is
-    /// off, and the stop is within the band plus [`LEAD_PERIODS`] periods' travel.
+    /// off, no other marker lies on the corner, and the stop is within the band plus [`LEAD_PERIODS`] periods' travel.
     fn corner_close(&self) -> Option<(f64, f64)> {
-        if self.held || self.tcpm || self.hold_until.is_some() {
+        if self.held || self.hold_pending() || self.tcpm || self.hold_until.is_some() {
             return None;
         }
         match self.markers.front() {
@@ -374,7 +433,10 @@ impl Planner {
                 op: None,
                 dwell,
                 band,
-            }) if *band > 0.0 && *dwell == 0.0 => {
+            }) if *band > 0.0
+                && *dwell == 0.0
+                && !matches!(self.markers.get(1), Some(m) if m.at() <= at + 1e-9) =>
+            {
                 let left = at - self.state.s;
                 let lead = LEAD_PERIODS * self.config.period * self.state.v;
                 (left > 0.0 && left <= band + lead).then_some((*at, *band))
