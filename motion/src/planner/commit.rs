@@ -205,7 +205,7 @@ impl Planner {
                 at: self.committed_end,
                 op: None,
                 dwell: 0.0,
-                band: done.stop_band,
+                corner: done.stop_corner,
             });
         }
         Ok(())
@@ -306,7 +306,7 @@ impl Planner {
             at,
             op: None,
             dwell: 0.0,
-            band: 0.0,
+            corner: None,
         });
     }
 }

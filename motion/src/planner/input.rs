@@ -101,7 +101,7 @@ impl Planner {
                     at: self.committed_end,
                     op: Some(op),
                     dwell: 0.0,
-                    band: 0.0,
+                    corner: None,
                 });
                 self.planned_pose = to;
                 return Ok(());
@@ -117,7 +117,7 @@ impl Planner {
                     at: self.committed_end,
                     op: Some(op),
                     dwell: 0.0,
-                    band: 0.0,
+                    corner: None,
                 });
                 return Ok(());
             }
@@ -232,7 +232,7 @@ impl Planner {
             at: self.committed_end,
             op: Some(op),
             dwell: seconds,
-            band: 0.0,
+            corner: None,
         });
         Ok(())
     }

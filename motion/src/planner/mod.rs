@@ -143,13 +143,13 @@ enum Marker {
     /// An op that takes effect when the path gets there.
     Event { at: f64, op: Op },
     /// A standstill at `at`, then the op (if any), then a hold of `dwell` seconds. A stop
-    /// with a positive `band` (mm) is a sharp corner that may be crossed without standing
-    /// still, as long as the path stays within that distance of it (see `overlap`).
+    /// with a `corner` is a sharp corner that may be crossed without standing still, as
+    /// long as the path stays within its band (see `overlap`).
     Stop {
         at: f64,
         op: Option<Op>,
         dwell: f64,
-        band: f64,
+        corner: Option<overlap::StopCorner>,
     },
 }
 

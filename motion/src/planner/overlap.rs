@@ -8,6 +8,9 @@
 //! together (each as a displacement from the corner), and the time they overlap is saved.
 //!
 //! The rules, checked on the samples themselves:
+//! * **Feed.** Each block's own motion keeps its feed, as planned. A combined sample moves
+//!   both blocks at once; its speed stays within the higher of their speed limits (feed
+//!   with the override), and it belongs to that block (the departure's on a tie).
 //! * **Turn.** The path turns by at most 150°: a line travelled back (a plunge and its
 //!   retract) reaches its end.
 //! * **Band.** Every combined sample is the braking's point plus the departure's offset
@@ -52,6 +55,44 @@ const LEAD_PERIODS: f64 = 48.0;
 /// of a line before it is travelled back) must be reached, not cut short within the band.
 const REVERSAL_COSINE: f64 = -0.866;
 
+/// A sharp stop corner the path may cross without standing still.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StopCorner {
+    /// Tolerance band around the programmed contour (mm).
+    pub band: f64,
+    /// Where the element before is a line: its unit direction (towards the corner) and the
+    /// length of it that is travelled.
+    pub before: Option<([f64; 9], f64)>,
+    /// Where the element after is a line: its unit direction and length.
+    pub after: Option<([f64; 9], f64)>,
+}
+
+impl StopCorner {
+    /// An upper bound of the distance of `p` from the programmed contour around the corner
+    /// `c`: the distance from the lines on either side where they are known.
+    fn distance(&self, p: &Pose, c: &Pose) -> f64 {
+        let w: Vec9 = std::array::from_fn(|i| p.0[i] - c.0[i]);
+        let from_line = |dir: &Vec9, sign: f64, length: f64| {
+            let along = (0..9).map(|i| w[i] * dir[i] * sign).sum::<f64>();
+            let t = along.clamp(0.0, length);
+            (0..9)
+                .map(|i| (w[i] - sign * dir[i] * t).powi(2))
+                .sum::<f64>()
+                .sqrt()
+        };
+        let before = self
+            .before
+            .map_or(f64::INFINITY, |(d, l)| from_line(&d, -1.0, l));
+        let after = self
+            .after
+            .map_or(f64::INFINITY, |(d, l)| from_line(&d, 1.0, l));
+        before.min(after)
+    }
+}
+
+/// Nine axis values.
+type Vec9 = [f64; 9];
+
 /// One sample kept back, with its path distance from the corner (left before it for the
 /// braking, travelled after it for the departure).
 #[derive(Debug, Clone, Copy)]
@@ -61,6 +102,9 @@ struct Kept {
     /// True when the sample lies on a programmed element (not on a blend, which may lie
     /// anywhere within the band of the contour).
     on_contour: bool,
+    /// Speed limit (programmed feed with the override, and the piece's own) of the piece
+    /// it lies on, mm/s.
+    limit: f64,
 }
 
 /// Where the combination stands.
@@ -68,10 +112,10 @@ struct Kept {
 enum Phase {
     /// No corner close.
     Idle,
-    /// Braking into the corner at `at` (path position) with band `band`.
-    Braking { at: f64, band: f64 },
+    /// Braking into the corner at `at` (path position).
+    Braking { at: f64, corner: StopCorner },
     /// The planner stood on the corner and departs from it.
-    Departing { at: f64, band: f64 },
+    Departing { at: f64, corner: StopCorner },
 }
 
 /// The state of the overlap at corners (see the module documentation).
@@ -145,7 +189,7 @@ impl Overlap {
 
     /// The largest number of periods by which the departure may start before the braking
     /// ends (see the module documentation), 0 when it may not.
-    fn best_shift(&self, band: f64, limits: &[Option<AxisLimits>; 9], period: f64) -> usize {
+    fn best_shift(&self, sc: &StopCorner, limits: &[Option<AxisLimits>; 9], period: f64) -> usize {
         let Some(rest) = self.tail.last() else {
             return 0;
         };
@@ -158,15 +202,18 @@ impl Overlap {
         if self.turn_cosine() < REVERSAL_COSINE {
             return 0;
         }
-        // Three samples of the braking before the overlap stay as planned (the differences
-        // that judge the limits reach back over them).
-        let most = m.saturating_sub(3).min(self.head.len());
+        // Three samples of the braking before the overlap and three of the departure after
+        // it stay as planned (the differences that judge the limits reach over them).
+        let most = m.saturating_sub(3).min(self.head.len().saturating_sub(3));
         (1..=most)
             .rev()
             .find(|&k| {
                 self.tail[m - k + 1..].iter().zip(&self.head).all(|(b, d)| {
-                    (b.on_contour && offset(d, &corner) <= band)
+                    let band = sc.band;
+                    let within = (b.on_contour && offset(d, &corner) <= band)
                         || (d.on_contour && offset(b, &corner) <= band)
+                        || sc.distance(&combined(b, d, &corner), &corner) <= band;
+                    within && speed(b, d) <= b.limit.max(d.limit) * (1.0 + 1e-9)
                 }) && self.keeps_limits(k, limits, period)
             })
             .unwrap_or(0)
@@ -196,17 +243,21 @@ impl Overlap {
         if n + k <= m {
             return self.tail[n].sample;
         }
-        let d = self.head[n + k - m - 1].sample;
+        let kept = &self.head[n + k - m - 1];
+        let d = kept.sample;
         if n > m {
             return d;
         }
-        let mut s = self.tail[n].sample;
+        let b = &self.tail[n];
+        let mut s = b.sample;
         for i in 0..corner.len() {
             s.pose.0[i] += d.pose.0[i] - corner[i];
             s.velocity[i] += d.velocity[i];
             s.acceleration[i] += d.acceleration[i];
         }
-        s.loc = d.loc;
+        if kept.limit >= b.limit {
+            s.loc = d.loc;
+        }
         s
     }
 
@@ -219,7 +270,7 @@ impl Overlap {
         let total = self.tail.len() + self.head.len();
         // Three samples before the first changed one, three after the braking's end.
         let lo = m + 1 - k - 3;
-        let hi = (m + 3).min(total - k - 1);
+        let hi = m + 3;
         let planned = |n: usize| {
             if n <= m {
                 self.tail[n].sample.pose
@@ -237,6 +288,12 @@ impl Overlap {
             let most = [l.max_velocity, l.max_acceleration, l.max_jerk];
             for d in 0..3 {
                 if shifted[d] > most[d].max(own[d]) * (1.0 + 1e-9) {
+                    if std::env::var_os("KLAR_OVDBG2").is_some() {
+                        eprintln!(
+                            "  k={k} axis {i} d{d} {} > {} own {}",
+                            shifted[d], most[d], own[d]
+                        );
+                    }
                     return false;
                 }
             }
@@ -248,12 +305,15 @@ impl Overlap {
     /// periods, and queues the result (then `next`, if any). Returns the periods saved.
     fn combine(
         &mut self,
-        band: f64,
+        corner: &StopCorner,
         limits: &[Option<AxisLimits>; 9],
         period: f64,
         next: Option<Step>,
     ) -> usize {
-        let k = self.best_shift(band, limits, period);
+        let k = self.best_shift(corner, limits, period);
+        if std::env::var_os("KLAR_OVDBG").is_some() {
+            eprintln!("OV k={k} tail={} head={}", self.tail.len(), self.head.len());
+        }
         if k == 0 {
             self.give_out_as_planned(next);
             return 0;
@@ -300,6 +360,24 @@ fn peaks(x: impl Iterator<Item = f64>, period: f64) -> [f64; 3] {
     out
 }
 
+/// The pose of the braking's sample `b` plus the departure's `d` offset from the corner `c`.
+fn combined(b: &Kept, d: &Kept, c: &Pose) -> Pose {
+    Pose(std::array::from_fn(|i| {
+        b.sample.pose.0[i] + d.sample.pose.0[i] - c.0[i]
+    }))
+}
+
+/// Path speed of the braking's sample `b` and the departure's `d` combined (mm/s).
+fn speed(b: &Kept, d: &Kept) -> f64 {
+    b.sample
+        .velocity
+        .iter()
+        .zip(&d.sample.velocity)
+        .map(|(x, y)| (x + y) * (x + y))
+        .sum::<f64>()
+        .sqrt()
+}
+
 /// Straight-line distance of a kept sample from the corner `c`.
 fn offset(k: &Kept, c: &Pose) -> f64 {
     k.sample
@@ -320,6 +398,13 @@ impl Planner {
             .is_some_and(|p| matches!(p.shape, Shape::Element(_)))
     }
 
+    /// Speed limit of the piece the path state lies on (mm/s).
+    fn piece_limit(&self) -> f64 {
+        self.pieces
+            .front()
+            .map_or(0.0, |p| p.speed_limit(self.factor))
+    }
+
     /// The next step for the servo loop, with sharp corners crossed without standing still
     /// where that is allowed (see the module documentation).
     pub(super) fn overlapped_step(&mut self, starved: bool) -> Option<Step> {
@@ -336,11 +421,11 @@ impl Planner {
                 // The path ended (a departure that ends the program): what was kept back
                 // goes out, combined where it may be.
                 if collecting {
-                    let band = match self.overlap.phase {
-                        Phase::Braking { band, .. } | Phase::Departing { band, .. } => band,
-                        Phase::Idle => 0.0,
-                    };
-                    self.end_overlap(band, None);
+                    if let Phase::Braking { corner, .. } | Phase::Departing { corner, .. } =
+                        self.overlap.phase
+                    {
+                        self.end_overlap(&corner, None);
+                    }
                     if let Some(step) = self.overlap.out.pop_front() {
                         return Some(step);
                     }
@@ -350,35 +435,37 @@ impl Planner {
             match self.overlap.phase {
                 Phase::Idle => {
                     if let Step::Sample(sample) = &step
-                        && let Some((at, band)) = self.corner_close()
+                        && let Some((at, corner)) = self.corner_close()
                     {
-                        self.overlap.phase = Phase::Braking { at, band };
+                        self.overlap.phase = Phase::Braking { at, corner };
                         self.overlap.tail.push(Kept {
                             sample: *sample,
                             distance: at - self.state.s,
                             on_contour: self.on_contour(),
+                            limit: self.piece_limit(),
                         });
                         continue;
                     }
                     return Some(step);
                 }
-                Phase::Braking { at, band } => match step {
+                Phase::Braking { at, corner } => match step {
                     Step::Sample(sample) if self.overlap.passed => {
-                        self.overlap.phase = Phase::Departing { at, band };
-                        self.keep_departure(sample, at, band);
+                        self.overlap.phase = Phase::Departing { at, corner };
+                        self.keep_departure(sample, at, &corner);
                     }
                     Step::Sample(sample) if self.overlap.tail.len() < TAIL_SAMPLES => {
                         self.overlap.tail.push(Kept {
                             sample,
                             distance: at - self.state.s,
                             on_contour: self.on_contour(),
+                            limit: self.piece_limit(),
                         });
                     }
                     other => self.overlap.give_out_as_planned(Some(other)),
                 },
-                Phase::Departing { at, band } => match step {
-                    Step::Sample(sample) => self.keep_departure(sample, at, band),
-                    event => self.end_overlap(band, Some(event)),
+                Phase::Departing { at, corner } => match step {
+                    Step::Sample(sample) => self.keep_departure(sample, at, &corner),
+                    event => self.end_overlap(&corner, Some(event)),
                 },
             }
         }
@@ -386,13 +473,15 @@ impl Planner {
 
     /// Keeps a sample of the departure from the corner at `at`; combines once more would
     /// not help.
-    fn keep_departure(&mut self, sample: Sample, at: f64, band: f64) {
+    fn keep_departure(&mut self, sample: Sample, at: f64, corner: &StopCorner) {
+        let band = corner.band;
         let distance = self.state.s - at;
-        let on_contour = self.on_contour();
+        let (on_contour, limit) = (self.on_contour(), self.piece_limit());
         self.overlap.head.push(Kept {
             sample,
             distance,
             on_contour,
+            limit,
         });
         // Departure samples beyond the band pair only with braking samples within it.
         let within = self
@@ -407,23 +496,24 @@ impl Planner {
             .iter()
             .filter(|k| k.distance > band)
             .count();
-        if beyond >= within || self.overlap.head.len() >= HEAD_SAMPLES {
-            self.end_overlap(band, None);
+        // Three more stay as planned after the overlap (see `best_shift`).
+        if beyond >= within + 3 || self.overlap.head.len() >= HEAD_SAMPLES {
+            self.end_overlap(corner, None);
         }
     }
 
     /// Combines what was kept back; the planner's clock moves back by the periods saved.
-    fn end_overlap(&mut self, band: f64, next: Option<Step>) {
+    fn end_overlap(&mut self, corner: &StopCorner, next: Option<Step>) {
         let saved = self
             .overlap
-            .combine(band, &self.config.limits, self.config.period, next);
+            .combine(corner, &self.config.limits, self.config.period, next);
         self.cycles -= saved as u64;
     }
 
     /// The corner ahead (path position and band) when the state closes in on a stop that
     /// may be overlapped: the next marker is such a stop, no feed hold is asked for, TCPM is
     /// off, no other marker lies on the corner, and the stop is within the band plus [`LEAD_PERIODS`] periods' travel.
-    fn corner_close(&self) -> Option<(f64, f64)> {
+    fn corner_close(&self) -> Option<(f64, StopCorner)> {
         if self.held || self.hold_pending() || self.tcpm || self.hold_until.is_some() {
             return None;
         }
@@ -432,14 +522,13 @@ impl Planner {
                 at,
                 op: None,
                 dwell,
-                band,
-            }) if *band > 0.0
-                && *dwell == 0.0
+                corner: Some(corner),
+            }) if *dwell == 0.0
                 && !matches!(self.markers.get(1), Some(m) if m.at() <= at + 1e-9) =>
             {
                 let left = at - self.state.s;
                 let lead = LEAD_PERIODS * self.config.period * self.state.v;
-                (left > 0.0 && left <= band + lead).then_some((*at, *band))
+                (left > 0.0 && left <= corner.band + lead).then_some((*at, *corner))
             }
             _ => None,
         }

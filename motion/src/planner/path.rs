@@ -46,6 +46,7 @@ use super::corner_share::{Derate, share_corner};
 use super::corner_stop::{
     BlendPart, SHARP_TURN, stop_is_faster, stop_saves_time, too_slow, turns_rotary,
 };
+use super::overlap::StopCorner;
 use super::run;
 use super::smooth::{Stencil, split_point};
 use crate::blend::{BlendPool, ContourPart, Quintic, blend_within};
@@ -306,10 +307,10 @@ pub struct Committed {
     pub stop_first: bool,
     /// True when the path must stop after all new pieces.
     pub stop_at_end: bool,
-    /// Band (mm) within which the stop at the end may be crossed without standing still:
-    /// the corner's tolerance where it is a corner between two elements on linear axes
-    /// whose blend was refused, zero for every other stop (see `overlap`).
-    pub stop_band: f64,
+    /// The corner at the stop at the end, where it may be crossed without standing still:
+    /// a corner between two elements on linear axes whose blend was refused, within a
+    /// positive tolerance (see `overlap`).
+    pub stop_corner: Option<StopCorner>,
     /// Waiting elements the new pieces used up completely (a run of dense code blended as
     /// one curve): their events follow the new pieces.
     pub consumed: usize,
@@ -467,7 +468,14 @@ pub fn commit(
         && cur.segment.metric() == Metric::Linear
         && next.segment.metric() == Metric::Linear
     {
-        out.stop_band = tol;
+        let straight = |e: &Element, d1: &[f64; 9], length: f64| {
+            matches!(e.segment, Segment::Line(_)).then_some((*d1, length))
+        };
+        out.stop_corner = Some(StopCorner {
+            band: tol,
+            before: straight(cur, &end.d1, len - cur.trim),
+            after: straight(next, &start.d1, next.segment.length()),
+        });
         share_corner(
             &end.d1,
             &start.d1,
