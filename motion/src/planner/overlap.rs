@@ -14,10 +14,11 @@
 //! * **Turn.** The path turns by at most 150°: a line travelled back (a plunge and its
 //!   retract) reaches its end.
 //! * **Band.** Every combined sample is the braking's point plus the departure's offset
-//!   from the corner. Where the braking's point lies on a programmed element (not on a
-//!   blend), the combined sample lies within the departure's distance from the corner of
-//!   the contour; where the departure's point does, within the braking's distance. One of
-//!   the two must be within the band.
+//!   from the corner, and must lie within the band of the programmed contour. Where the
+//!   elements on either side are lines, its distance from them is computed; otherwise it
+//!   is bounded: where the braking's point lies on a programmed element (not on a blend),
+//!   the combined sample lies within the departure's distance from the corner of the
+//!   contour, and where the departure's point does, within the braking's distance.
 //! * **Axes.** Every axis keeps its velocity and acceleration limits at each combined
 //!   sample and its jerk limit over each period (the change of acceleration), from two
 //!   periods before the overlap to two after it. An axis that moves in only one of the two
@@ -250,10 +251,12 @@ impl Overlap {
         }
         let b = &self.tail[n];
         let mut s = b.sample;
-        for i in 0..corner.len() {
-            s.pose.0[i] += d.pose.0[i] - corner[i];
-            s.velocity[i] += d.velocity[i];
-            s.acceleration[i] += d.acceleration[i];
+        s.pose = combined(b, kept, &Pose(corner));
+        for (v, w) in s.velocity.iter_mut().zip(&d.velocity) {
+            *v += w;
+        }
+        for (a, w) in s.acceleration.iter_mut().zip(&d.acceleration) {
+            *a += w;
         }
         if kept.limit >= b.limit {
             s.loc = d.loc;
@@ -288,12 +291,6 @@ impl Overlap {
             let most = [l.max_velocity, l.max_acceleration, l.max_jerk];
             for d in 0..3 {
                 if shifted[d] > most[d].max(own[d]) * (1.0 + 1e-9) {
-                    if std::env::var_os("KLAR_OVDBG2").is_some() {
-                        eprintln!(
-                            "  k={k} axis {i} d{d} {} > {} own {}",
-                            shifted[d], most[d], own[d]
-                        );
-                    }
                     return false;
                 }
             }
@@ -311,9 +308,6 @@ impl Overlap {
         next: Option<Step>,
     ) -> usize {
         let k = self.best_shift(corner, limits, period);
-        if std::env::var_os("KLAR_OVDBG").is_some() {
-            eprintln!("OV k={k} tail={} head={}", self.tail.len(), self.head.len());
-        }
         if k == 0 {
             self.give_out_as_planned(next);
             return 0;
