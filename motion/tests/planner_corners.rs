@@ -138,6 +138,51 @@ fn a_stepover_in_a_tight_band_overlaps_the_stop_at_the_corner() {
 }
 
 #[test]
+fn a_lift_after_a_sloped_pass_overlaps_the_stop_sharing_z() {
+    // A finishing pass that falls 0.12 mm over 10 mm at F2400, then 1 mm up in Z at F400: Z
+    // moves on both sides of the corner. The lift plans with Z's limits lowered by 1.5 times
+    // the pass's share of them, so the pass's braking and the lift's start add up within
+    // Z's limits (checked by `corner` on the trace) and overlap as at a level pass.
+    let tol = 0.01;
+    let (corner_at, top) = (Pose::xyz(10.0, 0.0, -0.12), Pose::xyz(10.0, 0.0, 0.88));
+    let (r, closest) = corner(corner_at, 40.0, top, 400.0 / 60.0, tol);
+    assert!(
+        closest > 1e-3,
+        "the path passes {closest} mm from the corner"
+    );
+    // X binds the pass: its path limits are X's over |u_x|; the lift keeps Z's, lowered.
+    let length = (100.0f64 + 0.0144).sqrt();
+    let (ux, uz) = (10.0 / length, 0.12 / length);
+    let (pass_a, pass_j) = (A / ux, J / ux);
+    let lowered = 1.0 - 1.5 * uz / ux;
+    let (lift_a, lift_j) = (A * lowered, J * lowered);
+    let ramp = |v: f64, a: f64, j: f64| {
+        if v >= a * a / j {
+            v / a + a / j
+        } else {
+            2.0 * (v / j).sqrt()
+        }
+    };
+    let v2 = 400.0 / 60.0;
+    let stop = length / 40.0 + ramp(40.0, pass_a, pass_j) + 1.0 / v2 + ramp(v2, lift_a, lift_j);
+    // The overlap: the pass's last 0.01 mm in the final jerk phase of its stop, the lift's
+    // first 0.01 mm of its S-curve (its first half covers j·t³/6 = 0.0091 mm with the
+    // lowered jerk; the rest of the way at about half the feed).
+    let brake_tail = (6.0 * tol / pass_j).cbrt();
+    let half = (v2 / lift_j).sqrt();
+    let first_half = lift_j * half.powi(3) / 6.0;
+    assert!(first_half < tol);
+    let start = half + (tol - first_half) / (v2 / 2.0);
+    let overlap = brake_tail + start;
+    let t = r.samples.last().map_or(0.0, |s| s.t);
+    let saved = stop - t;
+    assert!(
+        saved >= overlap - 0.002 - 1e-9 && saved <= overlap + 0.001,
+        "{t} s: {saved} s saved against the exact stop's {stop} s, the overlap allows {overlap} s"
+    );
+}
+
+#[test]
 fn a_line_travelled_back_reaches_its_end_standing_still() {
     // Along X at F2400, then 1 mm back at F400: the path turns back on itself, so the stop
     // is not overlapped and the path reaches the end of the first line standing still.
