@@ -7,7 +7,9 @@
 //! of the last part of the braking and of the first part of the speeding up are added
 //! together (each as a displacement from the corner), and the time they overlap is saved.
 //!
-//! The rules, checked on the samples themselves:
+//! Only corners between elements on the linear axes are crossed so (no rotary axis turns on
+//! either side: its degrees do not measure against a band in millimetres). The rules,
+//! checked on the samples themselves:
 //! * **Feed.** Each block's own motion keeps its feed, as planned. A combined sample moves
 //!   both blocks at once; its speed stays within the higher of their speed limits (feed
 //!   with the override), and it belongs to that block (the departure's on a tie).

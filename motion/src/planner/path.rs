@@ -308,8 +308,8 @@ pub struct Committed {
     /// True when the path must stop after all new pieces.
     pub stop_at_end: bool,
     /// The corner at the stop at the end, where it may be crossed without standing still:
-    /// a corner between two elements on linear axes whose blend was refused, within a
-    /// positive tolerance (see `overlap`).
+    /// a corner between two elements on linear axes (neither turning a rotary axis) whose
+    /// blend was refused, within a positive tolerance (see `overlap`).
     pub stop_corner: Option<StopCorner>,
     /// Waiting elements the new pieces used up completely (a run of dense code blended as
     /// one curve): their events follow the new pieces.
@@ -467,6 +467,8 @@ pub fn commit(
     if tol > 0.0
         && cur.segment.metric() == Metric::Linear
         && next.segment.metric() == Metric::Linear
+        && !turns_rotary(cur)
+        && !turns_rotary(next)
     {
         let straight = |e: &Element, d1: &[f64; 9], length: f64| {
             matches!(e.segment, Segment::Line(_)).then_some((*d1, length))
