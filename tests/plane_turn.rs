@@ -55,12 +55,24 @@ fn plane_turn_holds_the_linear_axes_and_the_next_move_reaches_its_point() {
     // The rotary axes really turned both: half way through A passed 15.
     assert!((start..tilted).any(|i| (row(i)[3] - 15.0).abs() < 0.5));
     // The following L X+10 Y-5 Z+20 is in the tilted system R = Rz(45)·Rx(30): its
-    // workpiece point is R·(10, −5, 20), and the tool tip reaches it.
-    let goal = rz(45.0, rx(30.0, [10.0, -5.0, 20.0]));
-    let reached = (tilted..n).any(|i| {
+    // workpiece point is R·(10, −5, 20). The corner into L Z+60 may be crossed within the
+    // path tolerance (0.01 mm), passing within twice that of the corner point; L Z+60 ends at R·(10, −5, 60), where the path stops for
+    // PLANE RESET, and the tool tip reaches that point exactly.
+    let tip = |i: usize| {
         let r = row(i);
-        at(i, 30.0, 45.0) && dist(tip_of([r[0], r[1], r[2]], 30.0, 45.0), goal) < 1e-6
-    });
+        tip_of([r[0], r[1], r[2]], 30.0, 45.0)
+    };
+    let corner = rz(45.0, rx(30.0, [10.0, -5.0, 20.0]));
+    let closest = (tilted..n)
+        .filter(|&i| at(i, 30.0, 45.0))
+        .map(|i| dist(tip(i), corner))
+        .fold(f64::INFINITY, f64::min);
+    assert!(
+        closest <= 0.02 + 1e-9,
+        "the tip passed {closest} mm from {corner:?}"
+    );
+    let goal = rz(45.0, rx(30.0, [10.0, -5.0, 60.0]));
+    let reached = (tilted..n).any(|i| at(i, 30.0, 45.0) && dist(tip(i), goal) < 1e-6);
     assert!(reached, "the tip never reached {goal:?}");
     // PLANE RESET TURN: the axes turn back to zero with X Y Z held where L Z+60 left them.
     let back = (tilted..n)

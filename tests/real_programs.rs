@@ -376,10 +376,17 @@ fn m91_positions_in_machine_coordinates_past_the_preset() {
     result.expect("runs");
     let cols = commanded(&trace, &["X", "Y", "Z"]);
     let at_end_of = |pred: &dyn Fn(usize) -> bool| (0..cols[0].len()).filter(|&i| pred(i)).count();
+    // The corners between the rapids may be crossed within the path tolerance (0.01 mm):
+    // the path passes within twice that of each corner point; each move's own end is
+    // reached exactly.
+    let near = |v: f64, w: f64| (v - w).abs() <= 0.02 + 1e-9;
     // Z went to machine 150 exactly (not 130), and X then to 105 (preset 100 + shift 5)
-    assert!(at_end_of(&|i| cols[2][i] == 150.0 && cols[0][i] == 105.0) > 0);
+    assert!(at_end_of(&|i| cols[2][i] == 150.0) > 0);
+    assert!(at_end_of(&|i| cols[0][i] == 105.0) > 0);
+    assert!(at_end_of(&|i| near(cols[2][i], 150.0) && near(cols[0][i], 105.0)) > 0);
     // M92 X-250: machine X -250 with Y held at the preset's 50
-    assert!(at_end_of(&|i| cols[0][i] == -250.0 && cols[1][i] == 50.0 && cols[2][i] == 150.0) > 0);
+    assert!(at_end_of(&|i| cols[0][i] == -250.0 && cols[1][i] == 50.0) > 0);
+    assert!(at_end_of(&|i| near(cols[0][i], -250.0) && near(cols[2][i], 150.0)) > 0);
     let n = cols[0].len() - 1;
     // the last block is back in program coordinates: Z10 is machine Z -10
     assert_eq!((cols[0][n], cols[1][n], cols[2][n]), (-250.0, 50.0, -10.0));

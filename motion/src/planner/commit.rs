@@ -148,7 +148,10 @@ impl Planner {
             let is_element = matches!(shape, Shape::Element(_));
             // A blend's part has bounds of its own: computed once for both uses.
             let bounds = shape.bounds(offset, length);
-            let limits = self.limits_for(&shape, &bounds, offset, length);
+            let mut limits = self.limits_for(&shape, &bounds, offset, length);
+            if is_element && !front.element.derate.is_none() {
+                limits = front.element.derate.apply(&limits);
+            }
             let l = piece_limits(&bounds, length, feed, &limits, headroom)
                 .map_err(|e| piece_error(e, loc))?;
             let mut piece = Piece {
@@ -198,7 +201,12 @@ impl Planner {
             }
         }
         if done.stop_at_end && !(flushing && self.waiting.is_empty()) {
-            self.add_stop(self.committed_end);
+            self.markers.push_back(Marker::Stop {
+                at: self.committed_end,
+                op: None,
+                dwell: 0.0,
+                corner: done.stop_corner,
+            });
         }
         Ok(())
     }
@@ -298,6 +306,7 @@ impl Planner {
             at,
             op: None,
             dwell: 0.0,
+            corner: None,
         });
     }
 }

@@ -13,7 +13,7 @@ impl Planner {
     /// The next sample or event; `None` once finished and drained (or, before
     /// [`Planner::finish`], when it needs input first).
     pub fn next_step(&mut self) -> Option<Step> {
-        self.step(false)
+        self.overlapped_step(false)
     }
 
     /// The next sample or event when the caller has no input to give though the planner
@@ -22,10 +22,11 @@ impl Planner {
     /// path (it counts as a stop, see `next_stop`): a starved path slows down and comes to
     /// rest there, and holds until input arrives. `None` once finished and drained.
     pub fn next_step_starved(&mut self) -> Option<Step> {
-        self.step(true)
+        self.overlapped_step(true)
     }
 
-    fn step(&mut self, starved: bool) -> Option<Step> {
+    /// The next step of the planned motion, before corners are overlapped.
+    pub(super) fn step(&mut self, starved: bool) -> Option<Step> {
         self.place_move_hold();
         loop {
             match self.markers.front() {
@@ -53,14 +54,14 @@ impl Planner {
                     };
                     self.reached = at;
                     self.reached_stop(at);
+                    self.overlap.passed_stop(at);
                     if let Some(Marker::Stop { op, dwell, .. }) = self.markers.pop_front() {
                         if dwell > 0.0 {
                             let loc = op.as_ref().map_or(self.rest_loc, |o| o.loc);
                             // Holds at the same point add up (two dwells, a dwell and
                             // a machine function's wait).
-                            let from = self
-                                .hold_until
-                                .map_or(self.time(), |(end, _)| end.max(self.time()));
+                            let now = self.cycles as f64 * self.config.period;
+                            let from = self.hold_until.map_or(now, |(end, _)| end.max(now));
                             self.hold_until = Some((from + dwell, loc));
                         }
                         if let Some(op) = op {

@@ -2,6 +2,7 @@
 //! ride along the path, and the end of input.
 
 use super::commit::{path_feed, piece_error};
+use super::corner_share::Derate;
 use super::path::{Element, Shape, Waiting, piece_limits};
 use super::{BUFFER_CAPACITY, CONTINUITY_TOLERANCE, ELEMENTS_AHEAD, Marker, Planner, tcpm};
 use crate::error::MotionError;
@@ -100,6 +101,7 @@ impl Planner {
                     at: self.committed_end,
                     op: Some(op),
                     dwell: 0.0,
+                    corner: None,
                 });
                 self.planned_pose = to;
                 return Ok(());
@@ -115,6 +117,7 @@ impl Planner {
                     at: self.committed_end,
                     op: Some(op),
                     dwell: 0.0,
+                    corner: None,
                 });
                 return Ok(());
             }
@@ -194,6 +197,7 @@ impl Planner {
                 split: None,
                 // Nothing waits only where the path ends in a stop (or has not started).
                 from_rest: self.waiting.is_empty(),
+                derate: Derate::default(),
             },
             events,
         });
@@ -228,6 +232,7 @@ impl Planner {
             at: self.committed_end,
             op: Some(op),
             dwell: seconds,
+            corner: None,
         });
         Ok(())
     }

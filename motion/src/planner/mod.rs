@@ -26,6 +26,7 @@
 //! step onto the point).
 
 mod commit;
+mod corner_share;
 mod corner_stop;
 mod cruise;
 mod deep;
@@ -35,6 +36,7 @@ mod handover;
 mod input;
 mod move_hold;
 mod outside;
+mod overlap;
 pub mod path;
 #[cfg(test)]
 mod pool_tests;
@@ -140,8 +142,24 @@ pub enum Step {
 enum Marker {
     /// An op that takes effect when the path gets there.
     Event { at: f64, op: Op },
-    /// A standstill at `at`, then the op (if any), then a hold of `dwell` seconds.
-    Stop { at: f64, op: Option<Op>, dwell: f64 },
+    /// A standstill at `at`, then the op (if any), then a hold of `dwell` seconds. A stop
+    /// with a `corner` is a sharp corner that may be crossed without standing still, as
+    /// long as the path stays within its band (see `overlap`).
+    Stop {
+        at: f64,
+        op: Option<Op>,
+        dwell: f64,
+        corner: Option<overlap::StopCorner>,
+    },
+}
+
+impl Marker {
+    /// The path position it takes effect at.
+    fn at(&self) -> f64 {
+        match self {
+            Marker::Event { at, .. } | Marker::Stop { at, .. } => *at,
+        }
+    }
 }
 
 /// The planner: takes ops, gives samples at the servo period.
@@ -221,6 +239,8 @@ pub struct Planner {
     /// elements and taken back once their events are queued, so that events between moves
     /// do not allocate in the servo loop.
     spare_events: Vec<Vec<Op>>,
+    /// Sharp corners crossed without standing still (see `overlap`).
+    overlap: overlap::Overlap,
 }
 
 impl Planner {
@@ -298,6 +318,7 @@ impl Planner {
             blends: BlendPool::new(BLEND_SLOTS),
             splines: SplinePool::new(SPLINE_SLOTS),
             spent: None,
+            overlap: overlap::Overlap::default(),
             spare_events: Vec::new(),
         };
         planner.reserve();
@@ -406,7 +427,13 @@ impl Planner {
 
     /// Time of the last sample given out (0 before the first).
     pub fn time(&self) -> f64 {
-        self.cycles as f64 * self.config.period
+        (self.cycles - self.overlap.samples_ahead()) as f64 * self.config.period
+    }
+
+    /// Servo periods saved so far by crossing sharp corners without standing still (see
+    /// `overlap`).
+    pub fn corner_periods_saved(&self) -> u64 {
+        self.overlap.saved_periods()
     }
 
     /// The look-ahead distance the planner fills before it stops asking for input (mm).
@@ -446,8 +473,13 @@ impl Planner {
         self.held
     }
 
-    /// Current path speed (mm/s, or °/s on rotary-only moves).
+    /// Current path speed (mm/s, or °/s on rotary-only moves). Positive while samples of
+    /// a corner crossed without standing still are still to go out.
     pub fn path_speed(&self) -> f64 {
-        self.state.v
+        if self.overlap.is_empty() {
+            self.state.v
+        } else {
+            self.state.v.max(f64::MIN_POSITIVE)
+        }
     }
 }

@@ -69,6 +69,7 @@ impl Planner {
                 at: end,
                 op: None,
                 dwell: 0.0,
+                corner: None,
             },
         );
         self.move_hold = MoveHold {

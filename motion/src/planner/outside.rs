@@ -22,6 +22,7 @@ impl Planner {
             && self.markers.is_empty()
             && self.stash.is_none()
             && self.hold_until.is_none()
+            && self.overlap.is_empty()
             && self.at_rest()
             && self.state.s >= self.committed_end - ROUNDING
     }

@@ -42,9 +42,11 @@
 //! one over a run barely notices it. A polyline approximating a circle then becomes a curve of almost constant
 //! curvature, followed at the programmed feed.
 
+use super::corner_share::{Derate, share_corner};
 use super::corner_stop::{
     BlendPart, SHARP_TURN, stop_is_faster, stop_saves_time, too_slow, turns_rotary,
 };
+use super::overlap::StopCorner;
 use super::run;
 use super::smooth::{Stencil, split_point};
 use crate::blend::{BlendPool, ContourPart, Quintic, blend_within};
@@ -201,6 +203,9 @@ pub struct Element {
     pub split: Option<PathPoint>,
     /// True when the path stands still at its start (the first element after a stop).
     pub from_rest: bool,
+    /// Axis limits its own pieces give up to a neighbour across an overlapped stop corner
+    /// (see `corner_share`).
+    pub derate: Derate,
 }
 
 /// An element waiting for its corners, with the events that follow it.
@@ -302,6 +307,10 @@ pub struct Committed {
     pub stop_first: bool,
     /// True when the path must stop after all new pieces.
     pub stop_at_end: bool,
+    /// The corner at the stop at the end, where it may be crossed without standing still:
+    /// a corner between two elements on linear axes (neither turning a rotary axis) whose
+    /// blend was refused, within a positive tolerance (see `overlap`).
+    pub stop_corner: Option<StopCorner>,
     /// Waiting elements the new pieces used up completely (a run of dense code blended as
     /// one curve): their events follow the new pieces.
     pub consumed: usize,
@@ -455,6 +464,28 @@ pub fn commit(
     detach_split(cur);
     push_part(&mut out, cur, cur.trim, cur.segment.length());
     out.stop_at_end = true;
+    if tol > 0.0
+        && cur.segment.metric() == Metric::Linear
+        && next.segment.metric() == Metric::Linear
+        && !turns_rotary(cur)
+        && !turns_rotary(next)
+    {
+        let straight = |e: &Element, d1: &[f64; 9], length: f64| {
+            matches!(e.segment, Segment::Line(_)).then_some((*d1, length))
+        };
+        out.stop_corner = Some(StopCorner {
+            band: tol,
+            before: straight(cur, &end.d1, len - cur.trim),
+            after: straight(next, &start.d1, next.segment.length()),
+        });
+        share_corner(
+            &end.d1,
+            &start.d1,
+            limits,
+            &mut cur.derate,
+            &mut next.derate,
+        );
+    }
     next.trim = 0.0;
     next.split = None;
     next.from_rest = true;
