@@ -1,6 +1,9 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
+pub mod lathe;
+pub mod recess;
+
 use klar_interp::{Diagnostic, Interpreter, Op, OpKind, Pose};
 use std::path::PathBuf;
 
