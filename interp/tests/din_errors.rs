@@ -1,18 +1,8 @@
 //! Bad lathe DIN input: `file:line:col` diagnostics and no motion from the failing block.
 
 mod common;
-use klar_interp::{Diagnostic, Interpreter, Op, Pose};
-
-fn until_error(text: &str) -> (Vec<Op>, Diagnostic) {
-    let mut ops = Vec::new();
-    for r in Interpreter::from_source("bad.nc", text, Pose::ZERO) {
-        match r {
-            Ok(op) => ops.push(op),
-            Err(d) => return (ops, d),
-        }
-    }
-    panic!("expected a diagnostic, got {} ops", ops.len());
-}
+use common::lathe::until_error;
+use klar_interp::{Interpreter, Op, Pose};
 
 fn motions(ops: &[Op]) -> usize {
     ops.iter().filter(|o| o.kind.is_motion()).count()

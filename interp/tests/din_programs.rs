@@ -3,23 +3,9 @@
 
 mod common;
 use common::close;
+use common::lathe::{line_ends as lines, program_file, run_named as run};
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
-use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Plane, Pose};
-use std::path::PathBuf;
-
-fn program_file(rel: &str) -> String {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("programs")
-        .join(rel);
-    std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
-
-fn run(name: &str, text: &str) -> Vec<Op> {
-    Interpreter::from_source(name, text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
-}
+use klar_interp::{AxisLetter, Feed, Interpreter, OpKind, Plane, Pose};
 
 fn pose(x: f64, y: f64, z: f64, c: f64) -> Pose {
     let mut p = Pose::xyz(x, y, z);
@@ -32,15 +18,6 @@ fn close_pose(a: Pose, b: Pose) {
     for ax in AxisLetter::ALL {
         assert!((a[ax] - b[ax]).abs() < 1e-9, "{ax}: {a:?} != {b:?}");
     }
-}
-
-fn lines(ops: &[Op]) -> Vec<(Pose, Feed)> {
-    ops.iter()
-        .filter_map(|o| match o.kind {
-            OpKind::Line { to, feed, .. } => Some((to, feed)),
-            _ => None,
-        })
-        .collect()
 }
 
 #[test]

@@ -19,6 +19,13 @@ pub fn lathe_program(name: &str) -> String {
     program_file(&format!("lathe/{name}"))
 }
 
+/// The path of the lathe example program `name` in `programs/lathe/`.
+pub fn lathe_path(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../programs/lathe")
+        .join(name)
+}
+
 /// Runs `text` as the file `name` from the origin and returns all ops; panics on a
 /// diagnostic.
 pub fn run_named(name: &str, text: &str) -> Vec<Op> {
