@@ -54,14 +54,7 @@ pub fn run_text(text: &str) -> Result<Vec<Op>, String> {
 /// Runs `text` as `bad.nc` until its first diagnostic: the ops before it and the
 /// diagnostic; panics when the program runs through.
 pub fn until_error(text: &str) -> (Vec<Op>, Diagnostic) {
-    let mut ops = Vec::new();
-    for r in Interpreter::from_source("bad.nc", text, Pose::ZERO) {
-        match r {
-            Ok(op) => ops.push(op),
-            Err(d) => return (ops, d),
-        }
-    }
-    panic!("expected a diagnostic, got {} ops", ops.len());
+    super::run_until_error_named("bad.nc", text)
 }
 
 /// The first diagnostic of `text` run as `bad.nc`; panics when the program runs through.
