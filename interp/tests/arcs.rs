@@ -4,21 +4,6 @@ mod common;
 use common::*;
 use klar_interp::{AxisLetter, CompSide, OpKind, Plane, Pose};
 
-/// Unpacks an arc op: (from, to, center, plane, sweep).
-fn arc(k: &OpKind) -> (Pose, Pose, [f64; 2], Plane, f64) {
-    match k {
-        OpKind::Arc {
-            from,
-            to,
-            center,
-            plane,
-            sweep,
-            ..
-        } => (*from, *to, *center, *plane, *sweep),
-        other => panic!("not an arc: {other:?}"),
-    }
-}
-
 #[test]
 fn c_quarter_and_three_quarter_circles() {
     let ops = run(&program(

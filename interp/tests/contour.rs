@@ -35,20 +35,6 @@ fn line_pts(k: &OpKind) -> (Pose, Pose) {
     }
 }
 
-fn arc(k: &OpKind) -> (Pose, Pose, [f64; 2], Plane, f64) {
-    match k {
-        OpKind::Arc {
-            from,
-            to,
-            center,
-            plane,
-            sweep,
-            ..
-        } => (*from, *to, *center, *plane, *sweep),
-        other => panic!("not an arc: {other:?}"),
-    }
-}
-
 fn xy(p: Pose) -> [f64; 2] {
     [p[AxisLetter::X], p[AxisLetter::Y]]
 }

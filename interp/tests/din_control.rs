@@ -2,37 +2,14 @@
 //! op stream of a hand-unrolled program without them, and against positions worked out by
 //! hand; bad structures give located diagnostics.
 
+mod common;
+use common::lathe::{line_ends, program_file, run_nc as run, until_error};
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
-use klar_interp::{AxisLetter, Diagnostic, Feed, Interpreter, Op, OpKind, Pose};
+use klar_interp::{AxisLetter, Diagnostic, Feed, Op, OpKind, Pose};
 use std::path::PathBuf;
-
-fn program_file(rel: &str) -> String {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("programs")
-        .join(rel);
-    std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
-
-fn run(text: &str) -> Vec<Op> {
-    Interpreter::from_source("t.nc", text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
-}
 
 fn kinds(ops: &[Op]) -> Vec<OpKind> {
     ops.iter().map(|o| o.kind.clone()).collect()
-}
-
-fn until_error(text: &str) -> (Vec<Op>, Diagnostic) {
-    let mut ops = Vec::new();
-    for r in Interpreter::from_source("bad.nc", text, Pose::ZERO) {
-        match r {
-            Ok(op) => ops.push(op),
-            Err(d) => return (ops, d),
-        }
-    }
-    panic!("expected a diagnostic, got {} ops", ops.len());
 }
 
 /// Every diagnostic of a whole-program check.
@@ -48,15 +25,6 @@ fn check(text: &str) -> Vec<Diagnostic> {
 }
 
 static CHECKS: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(0);
-
-fn line_ends(ops: &[Op]) -> Vec<(Pose, Feed)> {
-    ops.iter()
-        .filter_map(|o| match o.kind {
-            OpKind::Line { to, feed, .. } => Some((to, feed)),
-            _ => None,
-        })
-        .collect()
-}
 
 #[test]
 fn speed_words_and_m3_give_one_spindle_op_in_either_order() {

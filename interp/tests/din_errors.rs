@@ -1,18 +1,8 @@
 //! Bad lathe DIN input: `file:line:col` diagnostics and no motion from the failing block.
 
 mod common;
-use klar_interp::{Diagnostic, Interpreter, Op, Pose};
-
-fn until_error(text: &str) -> (Vec<Op>, Diagnostic) {
-    let mut ops = Vec::new();
-    for r in Interpreter::from_source("bad.nc", text, Pose::ZERO) {
-        match r {
-            Ok(op) => ops.push(op),
-            Err(d) => return (ops, d),
-        }
-    }
-    panic!("expected a diagnostic, got {} ops", ops.len());
-}
+use common::lathe::until_error;
+use klar_interp::{Interpreter, Op, Pose};
 
 fn motions(ops: &[Op]) -> usize {
     ops.iter().filter(|o| o.kind.is_motion()).count()
@@ -90,16 +80,8 @@ fn unknown_g_words_and_missing_end() {
 #[test]
 fn random_bytes_never_panic() {
     for seed in 0u32..300 {
-        let mut x = seed.wrapping_mul(2_654_435_761).wrapping_add(7);
-        let mut bytes = b"MACHINING\n".to_vec();
-        for _ in 0..150 {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            let alphabet = b"NGXZCYBIKRFSTMPQAWiVEKS0123456789+-.?[]\" \n";
-            bytes.push(alphabet[(x as usize) % alphabet.len()]);
-        }
-        let text = String::from_utf8_lossy(&bytes).into_owned();
+        let alphabet = b"NGXZCYBIKRFSTMPQAWiVEKS0123456789+-.?[]\" \n";
+        let text = common::random_text(seed, 7, b"MACHINING\n", 150, alphabet);
         let _ = Interpreter::from_source("fuzz.nc", &text, Pose::ZERO)
             .take(5000)
             .count();

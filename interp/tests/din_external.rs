@@ -1,14 +1,10 @@
 //! External `.ncs` subprograms: the same ops as the program with a local subprogram,
 //! errors in the external file located there, missing files and recursion as diagnostics.
 
+mod common;
+use common::lathe::lathe_path as lathe;
 use klar_interp::{Interpreter, OpKind, Pose};
 use std::path::{Path, PathBuf};
-
-fn lathe(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe")
-        .join(name)
-}
 
 /// The motion of a program file, or its first diagnostic.
 fn motion(path: &Path) -> Result<Vec<OpKind>, String> {

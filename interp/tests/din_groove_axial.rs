@@ -1,25 +1,19 @@
 //! G860 on a recess in the front face: axial plunges along −Z with the tool's width along
 //! X, against values worked out by hand.
 
-use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
+mod common;
+use common::lathe::{block_lines, lathe_program, near, run_lathe, run_text};
+use klar_interp::{Feed, Op};
 
 fn ops() -> Vec<Op> {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe/groove_g860_face.nc");
-    let text = std::fs::read_to_string(p).unwrap();
-    Interpreter::from_source("groove_g860_face.nc", &text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
+    run_lathe("groove_g860_face.nc")
 }
 
 /// The moves of block 13 as (feed, to) with to = (z, x radius).
 fn moves(ops: &[Op]) -> Vec<(Feed, [f64; 2])> {
-    ops.iter()
-        .filter(|o| o.loc.block == Some(13))
-        .filter_map(|o| match o.kind {
-            OpKind::Line { to, feed, .. } => Some((feed, [to[AxisLetter::Z], to[AxisLetter::X]])),
-            _ => None,
-        })
+    block_lines(ops, 13)
+        .into_iter()
+        .map(|(feed, _, to)| (feed, to))
         .collect()
 }
 
@@ -40,14 +34,6 @@ fn face_depth(lo: f64, hi: f64) -> f64 {
         .filter(|r| *r >= lo.max(15.0) && *r <= hi.min(27.0))
         .map(z)
         .fold(f64::NEG_INFINITY, f64::max)
-}
-
-#[track_caller]
-fn near(a: [f64; 2], b: [f64; 2]) {
-    assert!(
-        (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
-        "{a:?} != {b:?}"
-    );
 }
 
 #[test]
@@ -97,21 +83,11 @@ fn g860_on_a_face_recess_plunges_along_z() {
 
 #[test]
 fn g860_on_a_face_recess_needs_the_tool_in_front_of_it() {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe/groove_g860_face.nc");
-    let text = std::fs::read_to_string(p)
-        .unwrap()
-        .replace("N12 G0 X60 Z2", "N12 G0 X60 Z-1");
-    let e: Result<Vec<Op>, String> = Interpreter::from_source("t.nc", &text, Pose::ZERO)
-        .map(|r| r.map_err(|d| d.to_string()))
-        .collect();
-    let e = e.unwrap_err();
+    let text = lathe_program("groove_g860_face.nc").replace("N12 G0 X60 Z2", "N12 G0 X60 Z-1");
+    let e = run_text(&text).unwrap_err();
     assert!(e.contains("stand in front of it"), "{e}");
     // G869 works axially too, but not from inside the face recess's depth
     let text = text.replace("N13 G860 NS3 NE5 P4 E0.04", "N13 G869 NS3 NE5 SB4 P2");
-    let e: Result<Vec<Op>, String> = Interpreter::from_source("t.nc", &text, Pose::ZERO)
-        .map(|r| r.map_err(|d| d.to_string()))
-        .collect();
-    let e = e.unwrap_err();
+    let e = run_text(&text).unwrap_err();
     assert!(e.contains("G869 starts at Z-1.000"), "{e}");
 }

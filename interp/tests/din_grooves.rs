@@ -1,54 +1,9 @@
 //! Recessing cycles G866/G870 on G22 recess elements and G860 on a contour area: plunge
 //! positions, depths and finishing passes against values worked out by hand.
 
-use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
-
-fn run(name: &str) -> Vec<Op> {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe")
-        .join(name);
-    let text = std::fs::read_to_string(p).unwrap();
-    Interpreter::from_source(name, &text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
-}
-
-fn run_text(text: &str) -> Result<Vec<Op>, String> {
-    Interpreter::from_source("t.nc", text, Pose::ZERO)
-        .map(|r| r.map_err(|d| d.to_string()))
-        .collect()
-}
-
-/// (z, x radius) of a pose.
-fn zx(p: &Pose) -> [f64; 2] {
-    [p[AxisLetter::Z], p[AxisLetter::X]]
-}
-
-/// The moves of `ops` as (feed, from, to).
-fn moves(ops: &[Op]) -> Vec<(Feed, [f64; 2], [f64; 2])> {
-    ops.iter()
-        .filter_map(|o| match o.kind {
-            OpKind::Line { from, to, feed } => Some((feed, zx(&from), zx(&to))),
-            _ => None,
-        })
-        .collect()
-}
-
-#[track_caller]
-fn near(a: [f64; 2], b: [f64; 2]) {
-    assert!(
-        (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
-        "{a:?} != {b:?}"
-    );
-}
-
-/// The moves of the block with this number.
-fn block(ops: &[Op], n: u64) -> Vec<Op> {
-    ops.iter()
-        .filter(|o| o.loc.block == Some(n))
-        .cloned()
-        .collect()
-}
+mod common;
+use common::lathe::{block, lines as moves, near, run_lathe as run, run_text};
+use klar_interp::{Feed, OpKind};
 
 #[test]
 fn g866_plunges_a_g22_recess_at_equal_overlapping_steps() {

@@ -1,25 +1,20 @@
 //! Linear face patterns (G743) and lateral-surface patterns (G744, G746) against positions
 //! computed by hand in machine coordinates (X radius, Z, C degrees).
 
-use klar_interp::{AxisLetter, Diagnostic, Feed, Interpreter, Op, OpKind, Pose};
+mod common;
+use common::lathe::{first_error, lathe_program, run_named};
+use klar_interp::{AxisLetter, Diagnostic, Feed, Op, OpKind, Pose};
 
 const SETUP: &str = "MACHINING\nN1 T1 G197 S1000 G94 F100 M103\nN2 M14\nN3 G0 X100 Z2\n";
 
+/// Runs `body` after the setup blocks as `p.nc`; panics on a diagnostic.
 fn run(body: &str) -> Vec<Op> {
-    let text = format!("{SETUP}{body}\nEND\n");
-    Interpreter::from_source("p.nc", &text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
+    run_named("p.nc", &format!("{SETUP}{body}\nEND\n"))
 }
 
+/// The first diagnostic of `body` after the setup blocks, run as `bad.nc`.
 fn until_error(body: &str) -> Diagnostic {
-    let text = format!("{SETUP}{body}\nEND\n");
-    for r in Interpreter::from_source("bad.nc", &text, Pose::ZERO) {
-        if let Err(d) = r {
-            return d;
-        }
-    }
-    panic!("expected a diagnostic");
+    first_error(&format!("{SETUP}{body}\nEND\n"))
 }
 
 fn feed_ends(ops: &[Op]) -> Vec<Pose> {
@@ -131,12 +126,7 @@ fn lateral_pattern_errors() {
 
 #[test]
 fn g793_mills_the_face_contour_in_the_turned_system() {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe/face_contour_g793.nc");
-    let text = std::fs::read_to_string(p).unwrap();
-    let ops: Vec<Op> = Interpreter::from_source("g793.nc", &text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect();
+    let ops = run_named("g793.nc", &lathe_program("face_contour_g793.nc"));
     // face point (x, y) seen with the spindle at C30: rot(-30°)·(x, y)
     let (s, c) = 30f64.to_radians().sin_cos();
     let turned = |x: f64, y: f64| [c * x + s * y, -s * x + c * y];
@@ -190,12 +180,7 @@ fn g793_mills_the_face_contour_in_the_turned_system() {
 
 #[test]
 fn example_program_drills_every_pattern_position() {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe/patterns_linear_lateral.nc");
-    let text = std::fs::read_to_string(p).unwrap();
-    let ops: Vec<Op> = Interpreter::from_source("pat.nc", &text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect();
+    let ops = run_named("pat.nc", &lathe_program("patterns_linear_lateral.nc"));
     let ends = feed_ends(&ops);
     // G743: (-15,-15) … (15,15) in steps of (10,10): the second hole at (-5,-5) → r √50,
     // C -135°; holes bottom at Z-6

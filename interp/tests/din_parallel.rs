@@ -2,35 +2,16 @@
 //! equal steps towards the blank, clipped to the blank, against positions worked out by
 //! hand.
 
-use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
-
-fn run_text(text: &str) -> Result<Vec<Op>, String> {
-    Interpreter::from_source("t.nc", text, Pose::ZERO)
-        .map(|r| r.map_err(|d| d.to_string()))
-        .collect()
-}
-
-fn zx(p: &Pose) -> [f64; 2] {
-    [p[AxisLetter::Z], p[AxisLetter::X]]
-}
+mod common;
+use common::lathe::{block_lines, near, run_text};
+use klar_interp::Feed;
 
 /// The moves of block `n` as (rapid?, to).
-fn moves(ops: &[Op], n: u64) -> Vec<(bool, [f64; 2])> {
-    ops.iter()
-        .filter(|o| o.loc.block == Some(n))
-        .filter_map(|o| match o.kind {
-            OpKind::Line { to, feed, .. } => Some((feed == Feed::Rapid, zx(&to))),
-            _ => None,
-        })
+fn moves(ops: &[klar_interp::Op], n: u64) -> Vec<(bool, [f64; 2])> {
+    block_lines(ops, n)
+        .into_iter()
+        .map(|(feed, _, to)| (feed == Feed::Rapid, to))
         .collect()
-}
-
-#[track_caller]
-fn near(a: [f64; 2], b: [f64; 2]) {
-    assert!(
-        (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
-        "{a:?} != {b:?}"
-    );
 }
 
 /// A Ø34 bar 50 long, front face at Z1; the part: face at Z0 up to Ø20, Ø20 to Z-20,

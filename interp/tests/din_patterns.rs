@@ -3,16 +3,17 @@
 
 mod common;
 use common::close;
+use common::lathe::run_named;
 use klar_interp::din::{CircleLayout, LateralPlane, PatternEnd};
-use klar_interp::{AxisLetter, Feed, Interpreter, OpKind, Pose};
+use klar_interp::{AxisLetter, Feed, OpKind};
 
 /// Runs a G745 block that drills by itself (ZE) and returns (C, X) of each hole bottom.
 fn holes(g745: &str) -> Vec<(f64, f64)> {
     let text = format!(
         "N1 T1 G197 S1000 G94 F100 M103\nN2 M14\nN3 G0 X200 Z5\nN4 {g745} ZS1 ZE-3\nN5 M30\nEND\n"
     );
-    Interpreter::from_source("p.nc", &text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
+    run_named("p.nc", &text)
+        .into_iter()
         .filter_map(|o| match o.kind {
             OpKind::Line { to, feed, .. } if feed != Feed::Rapid => {
                 Some((to[AxisLetter::C], to[AxisLetter::X]))

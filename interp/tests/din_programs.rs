@@ -2,24 +2,10 @@
 //! ZX plane, technology words, the manual's G745 example and a self-drilling pattern.
 
 mod common;
-use common::close;
+use common::lathe::{line_ends as lines, program_file, run_named as run};
+use common::{arc, close};
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
 use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Plane, Pose};
-use std::path::PathBuf;
-
-fn program_file(rel: &str) -> String {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("..")
-        .join("programs")
-        .join(rel);
-    std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))
-}
-
-fn run(name: &str, text: &str) -> Vec<Op> {
-    Interpreter::from_source(name, text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
-}
 
 fn pose(x: f64, y: f64, z: f64, c: f64) -> Pose {
     let mut p = Pose::xyz(x, y, z);
@@ -34,13 +20,24 @@ fn close_pose(a: Pose, b: Pose) {
     }
 }
 
-fn lines(ops: &[Op]) -> Vec<(Pose, Feed)> {
+/// The motion ops of `ops`, in order.
+fn motion_of(ops: &[Op]) -> Vec<&OpKind> {
     ops.iter()
-        .filter_map(|o| match o.kind {
-            OpKind::Line { to, feed, .. } => Some((to, feed)),
-            _ => None,
-        })
+        .filter(|o| o.kind.is_motion())
+        .map(|o| &o.kind)
         .collect()
+}
+
+/// Asserts that `k` is a straight move to `to` (within 1e-9 on every axis) at `feed`.
+#[track_caller]
+fn line_to(k: &OpKind, to: Pose, feed: Feed) {
+    match k {
+        OpKind::Line { to: t, feed: f, .. } => {
+            close_pose(*t, to);
+            assert_eq!(*f, feed);
+        }
+        other => panic!("{other:?}"),
+    }
 }
 
 #[test]
@@ -124,69 +121,36 @@ fn turning_program_halves_x_and_puts_arcs_in_the_zx_plane() {
             // G96 S180 under the G26 S3000 limit
             speed: SpindleSpeed::SurfaceSpeedCapped(180.0, 3000.0)
         }));
-    let motion: Vec<&OpKind> = ops
-        .iter()
-        .filter(|o| o.kind.is_motion())
-        .map(|o| &o.kind)
-        .collect();
+    let motion = motion_of(&ops);
     // N13 G0 X62 Z2: radius 31
-    match motion[0] {
-        OpKind::Line { to, feed, .. } => {
-            close_pose(*to, Pose::xyz(31.0, 0.0, 2.0));
-            assert_eq!(*feed, Feed::Rapid);
-        }
-        other => panic!("{other:?}"),
-    }
+    line_to(motion[0], Pose::xyz(31.0, 0.0, 2.0), Feed::Rapid);
     // N15 G1 Z-20 at 0.25 mm/rev
-    match motion[2] {
-        OpKind::Line { to, feed, .. } => {
-            close_pose(*to, Pose::xyz(20.0, 0.0, -20.0));
-            assert_eq!(*feed, Feed::PerRevolution(0.25));
-        }
-        other => panic!("{other:?}"),
-    }
+    line_to(
+        motion[2],
+        Pose::xyz(20.0, 0.0, -20.0),
+        Feed::PerRevolution(0.25),
+    );
     // N16 G13 X50 Z-25 R5: from (Z-20, r20) to (Z-25, r25); R5 → centre 5 away from both:
     // (Z-25, r20) or (Z-20, r25); G13 turns counter-clockwise with Z right and X up, i.e. a
     // positive sweep from Z towards X: the quarter about (Z-25, r20) starts at angle 90°
     // (+X side of the centre… measured in (Z, X): start − centre = (5, 0) → 0°) and ends
     // at (0, 5) → 90°: +90°.
-    match motion[3] {
-        OpKind::Arc {
-            from,
-            to,
-            center,
-            plane,
-            sweep,
-            ..
-        } => {
-            assert_eq!(*plane, Plane::ZX);
-            close_pose(*from, Pose::xyz(20.0, 0.0, -20.0));
-            close_pose(*to, Pose::xyz(25.0, 0.0, -25.0));
-            close(center[0], -25.0);
-            close(center[1], 20.0);
-            close(*sweep, 90.0);
-        }
-        other => panic!("{other:?}"),
-    }
+    let (from, to, center, plane, sweep) = arc(motion[3]);
+    assert_eq!(plane, Plane::ZX);
+    close_pose(from, Pose::xyz(20.0, 0.0, -20.0));
+    close_pose(to, Pose::xyz(25.0, 0.0, -25.0));
+    close(center[0], -25.0);
+    close(center[1], 20.0);
+    close(sweep, 90.0);
     // N18 G2 Xi4 Zi-2 I0 K-2 from (Z-25, r28): end (Z-27, r30), centre start + (K, I) =
     // (Z-27, r28); start − centre = (2, 0) → 0°, end − centre = (0, 2) → 90°, clockwise:
     // -270°
-    match motion[5] {
-        OpKind::Arc {
-            from,
-            to,
-            center,
-            sweep,
-            ..
-        } => {
-            close_pose(*from, Pose::xyz(28.0, 0.0, -25.0));
-            close_pose(*to, Pose::xyz(30.0, 0.0, -27.0));
-            close(center[0], -27.0);
-            close(center[1], 28.0);
-            close(*sweep, -270.0);
-        }
-        other => panic!("{other:?}"),
-    }
+    let (from, to, center, _, sweep) = arc(motion[5]);
+    close_pose(from, Pose::xyz(28.0, 0.0, -25.0));
+    close_pose(to, Pose::xyz(30.0, 0.0, -27.0));
+    close(center[0], -27.0);
+    close(center[1], 28.0);
+    close(sweep, -270.0);
     // N197 G890 NS3 NE6: from X0 Z2 onto the contour start (X0 Z0), face to r17 (the
     // chamfer BR-1 starts 1 mm before the corner r18), chamfer to (Z-1, r18), cylinder to
     // Z-20, face to r26 (BR2: tan 45° · 2 = 2 mm before r28), the rounding arc about
@@ -311,27 +275,15 @@ fn finishing_cycle_runs_the_finished_part_contour() {
                 MACHINING\nN10 T1 G96 S200 G95 F0.1 M4\nN11 G0 X50 Z5\nN12 G890 NS2 NE4\n\
                 N13 M30\nEND\n";
     let ops = run("fin.nc", text);
-    let motion: Vec<&OpKind> = ops
-        .iter()
-        .filter(|o| o.kind.is_motion())
-        .map(|o| &o.kind)
-        .collect();
+    let motion = motion_of(&ops);
     // G0 X50 Z5, the rapid to the contour start (X0 Z0), N2, N3, N4
     assert_eq!(motion.len(), 5, "{motion:?}");
-    match motion[1] {
-        OpKind::Line { to, feed, .. } => {
-            close_pose(*to, Pose::xyz(0.0, 0.0, 0.0));
-            assert_eq!(*feed, Feed::Rapid);
-        }
-        other => panic!("{other:?}"),
-    }
-    match motion[2] {
-        OpKind::Line { to, feed, .. } => {
-            close_pose(*to, Pose::xyz(18.0, 0.0, 0.0));
-            assert_eq!(*feed, Feed::PerRevolution(0.1));
-        }
-        other => panic!("{other:?}"),
-    }
+    line_to(motion[1], Pose::xyz(0.0, 0.0, 0.0), Feed::Rapid);
+    line_to(
+        motion[2],
+        Pose::xyz(18.0, 0.0, 0.0),
+        Feed::PerRevolution(0.1),
+    );
     // (Z0, r18) → (Z-2, r20) with R2: centres (Z-2, r18) or (Z0, r20); clockwise in (Z, X)
     // from the start, the quarter about (Z-2, r18): start − centre = (2, 0) → 0°, end −
     // centre = (0, 2) → 90°: counter-clockwise would be +90, so clockwise takes the other
@@ -384,22 +336,12 @@ fn br_rounds_or_chamfers_the_corner_between_two_lines() {
         OpKind::Line { to, .. } => close_pose(*to, Pose::xyz(18.0, 0.0, 0.0)),
         other => panic!("{other:?}"),
     }
-    match &m[1] {
-        OpKind::Arc {
-            from,
-            to,
-            center,
-            sweep,
-            ..
-        } => {
-            close_pose(*from, Pose::xyz(18.0, 0.0, 0.0));
-            close_pose(*to, Pose::xyz(20.0, 0.0, -2.0));
-            close(center[0], -2.0);
-            close(center[1], 18.0);
-            close(*sweep, 90.0);
-        }
-        other => panic!("{other:?}"),
-    }
+    let (from, to, center, _, sweep) = arc(&m[1]);
+    close_pose(from, Pose::xyz(18.0, 0.0, 0.0));
+    close_pose(to, Pose::xyz(20.0, 0.0, -2.0));
+    close(center[0], -2.0);
+    close(center[1], 18.0);
+    close(sweep, 90.0);
     match &m[2] {
         OpKind::Line { from, to, .. } => {
             close_pose(*from, Pose::xyz(20.0, 0.0, -2.0));

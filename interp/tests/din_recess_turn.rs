@@ -1,56 +1,16 @@
 //! Recess turning G869: the levels, plunge places and turning stretches against values
 //! worked out by hand, the finishing path, and a check that no cut enters the contour.
 
-use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
+mod common;
+use common::lathe::{
+    block_lines as moves, check_moves as check, lathe_program as read, run_text, samples,
+};
+use common::recess::{RAPID, overlap, sloped};
+use klar_interp::{Feed, Op};
 
 fn program() -> String {
     read("recess_turn_g869.nc")
 }
-
-fn read(name: &str) -> String {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe")
-        .join(name);
-    std::fs::read_to_string(p).unwrap()
-}
-
-fn run_text(text: &str) -> Result<Vec<Op>, String> {
-    Interpreter::from_source("t.nc", text, Pose::ZERO)
-        .map(|r| r.map_err(|d| d.to_string()))
-        .collect()
-}
-
-/// (z, x radius) of a pose.
-fn zx(p: &Pose) -> [f64; 2] {
-    [p[AxisLetter::Z], p[AxisLetter::X]]
-}
-
-/// The moves of the block with number `n` as (feed, from, to).
-fn moves(ops: &[Op], n: u64) -> Vec<(Feed, [f64; 2], [f64; 2])> {
-    ops.iter()
-        .filter(|o| o.loc.block == Some(n))
-        .filter_map(|o| match o.kind {
-            OpKind::Line { from, to, feed } => Some((feed, zx(&from), zx(&to))),
-            _ => None,
-        })
-        .collect()
-}
-
-#[track_caller]
-fn check(got: &[(Feed, [f64; 2], [f64; 2])], want: &[(Feed, [f64; 2])]) {
-    assert_eq!(got.len(), want.len(), "{got:?}");
-    for (i, (g, w)) in got.iter().zip(want).enumerate() {
-        assert_eq!(g.0, w.0, "move {i}: {g:?}");
-        assert!(
-            (g.2[0] - w.1[0]).abs() < 1e-8 && (g.2[1] - w.1[1]).abs() < 1e-8,
-            "move {i}: {:?} != {:?}",
-            g.2,
-            w.1
-        );
-    }
-}
-
-const RAPID: Feed = Feed::Rapid;
 
 #[test]
 fn g869_on_a_g22_recess_plunges_and_turns_back_and_forth() {
@@ -84,26 +44,6 @@ fn g869_on_a_g22_recess_plunges_and_turns_back_and_forth() {
         (RAPID, [5.0, 27.0]),
     ];
     check(&moves(&ops, 23), &want);
-}
-
-/// The sloped recess of the program (N7…N9): r30 at Z-70 down to r22 at Z-74, flat to
-/// Z-84, up to r30 at Z-88. The highest point strictly between `lo` and `hi`.
-fn sloped(lo: f64, hi: f64) -> f64 {
-    let x = |z: f64| {
-        if z >= -74.0 {
-            30.0 + 2.0 * (z + 70.0)
-        } else if z >= -84.0 {
-            22.0
-        } else {
-            22.0 + 2.0 * (-84.0 - z)
-        }
-    };
-    // piecewise linear: the highest point is at an end or a corner
-    [lo, hi, -74.0, -84.0]
-        .into_iter()
-        .filter(|z| *z >= lo && *z <= hi)
-        .map(x)
-        .fold(f64::NEG_INFINITY, f64::max)
 }
 
 #[test]
@@ -149,53 +89,12 @@ fn g869_with_oversizes_and_one_way_passes_on_sloped_walls() {
     assert!((sloped(-74.0, -71.0) - 28.0).abs() < 1e-12);
 }
 
-/// The FINISHED PART contour of the program as (z, x radius) corners.
-const CONTOUR: [[f64; 2]; 14] = [
-    [0.0, 0.0],
-    [0.0, 25.0],
-    [-20.0, 25.0],
-    [-20.0, 15.0],
-    [-40.0, 15.0],
-    [-40.0, 25.0],
-    [-60.0, 25.0],
-    [-60.0, 30.0],
-    [-70.0, 30.0],
-    [-74.0, 22.0],
-    [-84.0, 22.0],
-    [-88.0, 30.0],
-    [-100.0, 30.0],
-    [-100.0, 0.0],
-];
-
-/// How far the tool (`w` wide, +Z corner at `p`) reaches below the contour: the largest
-/// contour height inside its width minus the tool's height (≤ 0 when clear).
-fn overlap(p: [f64; 2], w: f64) -> f64 {
-    let (lo, hi) = (p[0] - w + 1e-9, p[0] - 1e-9);
-    let mut worst = f64::NEG_INFINITY;
-    for s in CONTOUR.windows(2) {
-        let (a, b) = (s[0], s[1]);
-        for t in 0..=200 {
-            let t = f64::from(t) / 200.0;
-            let q = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
-            if q[0] > lo && q[0] < hi {
-                worst = worst.max(q[1] - p[1]);
-            }
-        }
-    }
-    worst
-}
-
 #[test]
 fn g869_never_cuts_into_the_contour() {
     let ops = run_text(&program()).unwrap();
     for (n, w) in [(23, 4.0), (25, 3.0)] {
         for (_, from, to) in moves(&ops, n) {
-            for k in 0..=50 {
-                let t = f64::from(k) / 50.0;
-                let p = [
-                    from[0] + t * (to[0] - from[0]),
-                    from[1] + t * (to[1] - from[1]),
-                ];
+            for p in samples(from, to) {
                 assert!(overlap(p, w) < 1e-6, "N{n}: {p:?} cuts the contour");
             }
         }
@@ -475,12 +374,7 @@ fn g869_inside_on_an_arc_floor_stays_off_the_material() {
     // no point of any move puts the tool (its +Z corner at p, 4 wide, its outer edge at
     // p's radius) beyond the bore's surface under its width
     for (_, from, to) in &m {
-        for k in 0..=50 {
-            let t = f64::from(k) / 50.0;
-            let p = [
-                from[0] + t * (to[0] - from[0]),
-                from[1] + t * (to[1] - from[1]),
-            ];
+        for p in samples(*from, *to) {
             let wall = (1..200)
                 .map(|i| arc_bore_r(p[0] - 4.0 * f64::from(i) / 200.0))
                 .fold(f64::INFINITY, f64::min);

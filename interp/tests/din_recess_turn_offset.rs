@@ -2,47 +2,15 @@
 //! their offsets growing by B up to 0.8·SB, and the single clean-up cut, against moves
 //! worked out by hand; a check that no cut enters the contour; the refusals.
 
-use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
+mod common;
+use common::lathe::{block_lines as moves, check_moves as check, lathe_program, run_text, samples};
+use common::recess::{RAPID, overlap, sloped};
+use klar_interp::Feed;
 
 fn program() -> String {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe/recess_turn_g869_offset.nc");
-    std::fs::read_to_string(p).unwrap()
+    lathe_program("recess_turn_g869_offset.nc")
 }
 
-fn run_text(text: &str) -> Result<Vec<Op>, String> {
-    Interpreter::from_source("t.nc", text, Pose::ZERO)
-        .map(|r| r.map_err(|d| d.to_string()))
-        .collect()
-}
-
-/// The moves of the block with number `n` as (feed, from, to), (z, x radius).
-fn moves(ops: &[Op], n: u64) -> Vec<(Feed, [f64; 2], [f64; 2])> {
-    let zx = |p: &Pose| [p[AxisLetter::Z], p[AxisLetter::X]];
-    ops.iter()
-        .filter(|o| o.loc.block == Some(n))
-        .filter_map(|o| match o.kind {
-            OpKind::Line { from, to, feed } => Some((feed, zx(&from), zx(&to))),
-            _ => None,
-        })
-        .collect()
-}
-
-#[track_caller]
-fn check(got: &[(Feed, [f64; 2], [f64; 2])], want: &[(Feed, [f64; 2])]) {
-    assert_eq!(got.len(), want.len(), "{got:?}");
-    for (i, (g, w)) in got.iter().zip(want).enumerate() {
-        assert_eq!(g.0, w.0, "move {i}: {g:?}");
-        assert!(
-            (g.2[0] - w.1[0]).abs() < 1e-8 && (g.2[1] - w.1[1]).abs() < 1e-8,
-            "move {i}: {:?} != {:?}",
-            g.2,
-            w.1
-        );
-    }
-}
-
-const RAPID: Feed = Feed::Rapid;
 const F: Feed = Feed::PerRevolution(0.1);
 const O: Feed = Feed::PerRevolution(0.05);
 const E: Feed = Feed::PerRevolution(0.04);
@@ -116,25 +84,6 @@ fn g869_b_offsets_grow_by_b_to_the_limit_and_spare_the_last_pass() {
     );
 }
 
-/// The sloped recess (N7…N9): r30 at Z-70 down to r22 at Z-74, flat to Z-84, up to r30 at
-/// Z-88. The highest point between `lo` and `hi`.
-fn sloped(lo: f64, hi: f64) -> f64 {
-    let x = |z: f64| {
-        if z >= -74.0 {
-            30.0 + 2.0 * (z + 70.0)
-        } else if z >= -84.0 {
-            22.0
-        } else {
-            22.0 + 2.0 * (-84.0 - z)
-        }
-    };
-    [lo, hi, -74.0, -84.0]
-        .into_iter()
-        .filter(|z| *z >= lo && *z <= hi)
-        .map(x)
-        .fold(f64::NEG_INFINITY, f64::max)
-}
-
 #[test]
 fn g869_b_on_sloped_walls_follows_the_stretches_and_cleans_up_one_level() {
     let ops = run_text(&program()).unwrap();
@@ -175,41 +124,6 @@ fn g869_b_on_sloped_walls_follows_the_stretches_and_cleans_up_one_level() {
     check(&moves(&ops, 25), &want);
 }
 
-/// The FINISHED PART contour of the program as (z, x radius) corners.
-const CONTOUR: [[f64; 2]; 14] = [
-    [0.0, 0.0],
-    [0.0, 25.0],
-    [-20.0, 25.0],
-    [-20.0, 15.0],
-    [-40.0, 15.0],
-    [-40.0, 25.0],
-    [-60.0, 25.0],
-    [-60.0, 30.0],
-    [-70.0, 30.0],
-    [-74.0, 22.0],
-    [-84.0, 22.0],
-    [-88.0, 30.0],
-    [-100.0, 30.0],
-    [-100.0, 0.0],
-];
-
-/// How far the tool (`w` wide, +Z corner at `p`) reaches below the contour (≤ 0: clear).
-fn overlap(p: [f64; 2], w: f64) -> f64 {
-    let (lo, hi) = (p[0] - w + 1e-9, p[0] - 1e-9);
-    let mut worst = f64::NEG_INFINITY;
-    for s in CONTOUR.windows(2) {
-        let (a, b) = (s[0], s[1]);
-        for t in 0..=200 {
-            let t = f64::from(t) / 200.0;
-            let q = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
-            if q[0] > lo && q[0] < hi {
-                worst = worst.max(q[1] - p[1]);
-            }
-        }
-    }
-    worst
-}
-
 #[test]
 fn g869_b_never_cuts_into_the_contour() {
     let text = program();
@@ -220,12 +134,7 @@ fn g869_b_never_cuts_into_the_contour() {
         let ops = run_text(&t).unwrap();
         for (n, w) in [(23, 4.0), (25, 3.0)] {
             for (_, from, to) in moves(&ops, n) {
-                for k in 0..=50 {
-                    let s = f64::from(k) / 50.0;
-                    let p = [
-                        from[0] + s * (to[0] - from[0]),
-                        from[1] + s * (to[1] - from[1]),
-                    ];
+                for p in samples(from, to) {
                     assert!(overlap(p, w) < 1e-6, "{b} N{n}: {p:?} cuts the contour");
                 }
             }
@@ -251,11 +160,7 @@ fn g869_b_refusals_name_the_word() {
 
 #[test]
 fn g869_b_on_a_face_shortens_along_x() {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe/recess_turn_g869_face.nc");
-    let text = std::fs::read_to_string(p)
-        .unwrap()
-        .replace("SB3 P2.5", "SB3 P1.5 B0.5");
+    let text = lathe_program("recess_turn_g869_face.nc").replace("SB3 P2.5", "SB3 P1.5 B0.5");
     let ops = run_text(&text).unwrap();
     // face ring recess r10 … r18, Z0 → Z-6, SB3 along X with its reference corner at the
     // +X end: r13 (NS) … r18. P1.5: 4 levels Z-1.5, -3, -4.5, -6. The pass back to r13 on

@@ -1,36 +1,21 @@
 //! G810/G820 roughing cuts against cut lengths worked out by hand from the contour and the
 //! bar blank.
 
-use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
+mod common;
+use common::lathe::{first_error, lathe_program, lines, near, run_named};
+use klar_interp::{AxisLetter, Feed, Op, OpKind};
 
 fn program() -> Vec<Op> {
-    let p = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../programs/lathe/roughing_g810_g820.nc");
-    let text = std::fs::read_to_string(p).unwrap();
-    Interpreter::from_source("r.nc", &text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
+    run_named("r.nc", &lathe_program("roughing_g810_g820.nc"))
 }
 
 /// (from, to) of the feed moves at `f` mm/rev, as (z, x radius) pairs.
 fn cuts(ops: &[Op], f: f64) -> Vec<([f64; 2], [f64; 2])> {
-    ops.iter()
-        .filter_map(|o| match o.kind {
-            OpKind::Line { from, to, feed } if feed == Feed::PerRevolution(f) => Some((
-                [from[AxisLetter::Z], from[AxisLetter::X]],
-                [to[AxisLetter::Z], to[AxisLetter::X]],
-            )),
-            _ => None,
-        })
+    lines(ops)
+        .into_iter()
+        .filter(|(feed, _, _)| *feed == Feed::PerRevolution(f))
+        .map(|(_, from, to)| (from, to))
         .collect()
-}
-
-#[track_caller]
-fn near(a: [f64; 2], b: [f64; 2]) {
-    assert!(
-        (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
-        "{a:?} != {b:?}"
-    );
 }
 
 #[test]
@@ -97,14 +82,10 @@ fn g820_cuts_parallel_to_x_keep_the_allowances() {
 fn roughing_errors() {
     let text = "BLANK\nN1 G20 X60 Z80 K1\nFINISHED PART\nN2 G0 X0 Z0\nN3 G1 X40\n\
                 MACHINING\nN10 G95 F0.2\nN11 G0 X20 Z-5\nN12 G810 P2\nEND\n";
-    let d = Interpreter::from_source("bad.nc", text, Pose::ZERO)
-        .find_map(|r| r.err())
-        .expect("a diagnostic");
+    let d = first_error(text);
     assert_eq!((d.line, d.col), (9, 5), "{d}");
     assert!(d.message.contains("inside the blank"), "{d}");
     let text = "MACHINING\nN10 G95 F0.2\nN11 G0 X80 Z5\nN12 G810 P2\nEND\n";
-    let d = Interpreter::from_source("bad.nc", text, Pose::ZERO)
-        .find_map(|r| r.err())
-        .expect("a diagnostic");
+    let d = first_error(text);
     assert!(d.message.contains("FINISHED PART"), "{d}");
 }

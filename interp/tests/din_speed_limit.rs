@@ -1,14 +1,10 @@
 //! Lathe DIN G26 speed limit with constant surface speed G96, and G36 on the turning axis
 //! as a rigid tap geared to the main spindle: the ops the interpreter gives.
 
+mod common;
+use common::lathe::run_nc as run;
 use klar_interp::op::{SpindleDir, SpindleId, SpindleSpeed};
-use klar_interp::{AxisLetter, Interpreter, Op, OpKind, Pose};
-
-fn run(text: &str) -> Vec<Op> {
-    Interpreter::from_source("t.nc", text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
-}
+use klar_interp::{AxisLetter, Op, OpKind};
 
 /// The speeds of the main spindle's commands to turn.
 fn spindle_speeds(ops: &[Op]) -> Vec<SpindleSpeed> {

@@ -2,14 +2,10 @@
 //! every pass, the starting angle of every start, air cuts, tapers, contour threads and
 //! the approach/return moves, against closed forms worked out here from the manual's rules.
 
+mod common;
+use common::lathe::{near, run_text, zx};
 use klar_interp::op::ThreadLead;
-use klar_interp::{AxisLetter, Feed, Interpreter, Op, OpKind, Pose};
-
-fn run_text(text: &str) -> Result<Vec<Op>, String> {
-    Interpreter::from_source("t.nc", text, Pose::ZERO)
-        .map(|r| r.map_err(|d| d.to_string()))
-        .collect()
-}
+use klar_interp::{Feed, Interpreter, Op, OpKind, Pose};
 
 /// A program that stands the tool at X`x` Z`z` (diameter) and runs `cycle`.
 fn program(x: f64, z: f64, cycle: &str) -> String {
@@ -26,10 +22,6 @@ struct Pass {
     lead: ThreadLead,
     run_in: Option<f64>,
     run_out: Option<f64>,
-}
-
-fn zx(p: &Pose) -> [f64; 2] {
-    [p[AxisLetter::Z], p[AxisLetter::X]]
 }
 
 fn passes(ops: &[Op]) -> Vec<Pass> {
@@ -68,14 +60,6 @@ fn path(ops: &[Op]) -> Vec<(bool, [f64; 2], [f64; 2])> {
             _ => None,
         })
         .collect()
-}
-
-#[track_caller]
-fn near(a: [f64; 2], b: [f64; 2]) {
-    assert!(
-        (a[0] - b[0]).abs() < 1e-9 && (a[1] - b[1]).abs() < 1e-9,
-        "{a:?} != {b:?}"
-    );
 }
 
 /// Checks the passes of an external longitudinal thread on radius `r` from Z`z0` to Z`z1`

@@ -1,21 +1,13 @@
 //! Unknown coordinates `X?`/`Z?` of FINISHED PART lines, solved from the line's angle and
 //! the next element, against intersections worked out by hand.
 
-use klar_interp::{AxisLetter, Diagnostic, Feed, Interpreter, Op, OpKind, Pose};
+mod common;
+use common::lathe::{first_error as until_error, run_named};
+use klar_interp::{AxisLetter, Feed, Op, OpKind};
 
+/// Runs `text` as `u.nc`; panics on a diagnostic.
 fn run(text: &str) -> Vec<Op> {
-    Interpreter::from_source("u.nc", text, Pose::ZERO)
-        .map(|r| r.unwrap_or_else(|d| panic!("{d}")))
-        .collect()
-}
-
-fn until_error(text: &str) -> Diagnostic {
-    for r in Interpreter::from_source("bad.nc", text, Pose::ZERO) {
-        if let Err(d) = r {
-            return d;
-        }
-    }
-    panic!("expected a diagnostic");
+    run_named("u.nc", text)
 }
 
 /// End points (z, x radius) of the finishing moves at the feed of G890.

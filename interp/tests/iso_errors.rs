@@ -1,17 +1,12 @@
 //! Bad TNC ISO input: located diagnostics, no panics, no ops from the failing block.
 
 mod common;
+use common::{random_text, run_until_error_named};
 use klar_interp::{Diagnostic, Interpreter, Op, Pose};
 
+/// Runs `text` as `bad.i` until its first diagnostic: the ops before it and the diagnostic.
 fn until_error(text: &str) -> (Vec<Op>, Diagnostic) {
-    let mut ops = Vec::new();
-    for r in Interpreter::from_source("bad.i", text, Pose::ZERO) {
-        match r {
-            Ok(op) => ops.push(op),
-            Err(d) => return (ops, d),
-        }
-    }
-    panic!("expected a diagnostic, got {} ops", ops.len());
+    run_until_error_named("bad.i", text)
 }
 
 #[test]
@@ -76,16 +71,8 @@ fn endless_loops_and_random_bytes_end_without_panic() {
     assert!(ops.is_empty());
     assert!(d.message.contains("loops endlessly"), "{d}");
     for seed in 0u32..300 {
-        let mut x = seed.wrapping_mul(2_654_435_761).wrapping_add(12345);
-        let mut bytes = b"%F G71 *\n".to_vec();
-        for _ in 0..120 {
-            x ^= x << 13;
-            x ^= x >> 17;
-            x ^= x << 5;
-            let alphabet = b"NGXYZIJKRHFQLDPMT0123456789+-.,*; =%\n/";
-            bytes.push(alphabet[(x as usize) % alphabet.len()]);
-        }
-        let text = String::from_utf8_lossy(&bytes).into_owned();
+        let alphabet = b"NGXYZIJKRHFQLDPMT0123456789+-.,*; =%\n/";
+        let text = random_text(seed, 12345, b"%F G71 *\n", 120, alphabet);
         let _ = Interpreter::from_source("fuzz.i", &text, Pose::ZERO)
             .take(2000)
             .count();

@@ -1,7 +1,10 @@
 //! Helpers shared by the integration tests.
 #![allow(dead_code)]
 
-use klar_interp::{Diagnostic, Interpreter, Op, OpKind, Pose};
+pub mod lathe;
+pub mod recess;
+
+use klar_interp::{Diagnostic, Interpreter, Op, OpKind, Plane, Pose};
 use std::path::PathBuf;
 
 /// Wraps blocks in BEGIN/END PGM.
@@ -23,8 +26,14 @@ pub fn run_from(text: &str, start: Pose) -> Vec<Op> {
 
 /// Runs until the first diagnostic: the ops before it and the diagnostic.
 pub fn run_until_error(text: &str) -> (Vec<Op>, Diagnostic) {
+    run_until_error_named("t.h", text)
+}
+
+/// Runs `text` as the file `name` until the first diagnostic: the ops before it and the
+/// diagnostic; panics when the program runs through.
+pub fn run_until_error_named(name: &str, text: &str) -> (Vec<Op>, Diagnostic) {
     let mut ops = Vec::new();
-    for r in Interpreter::from_source("t.h", text, Pose::ZERO) {
+    for r in Interpreter::from_source(name, text, Pose::ZERO) {
         match r {
             Ok(op) => ops.push(op),
             Err(d) => return (ops, d),
@@ -39,6 +48,36 @@ pub fn motions(ops: &[Op]) -> Vec<OpKind> {
         .filter(|o| o.kind.is_motion())
         .map(|o| o.kind.clone())
         .collect()
+}
+
+/// Unpacks an arc op: (from, to, center, plane, sweep); panics on any other op.
+#[track_caller]
+pub fn arc(k: &OpKind) -> (Pose, Pose, [f64; 2], Plane, f64) {
+    match k {
+        OpKind::Arc {
+            from,
+            to,
+            center,
+            plane,
+            sweep,
+            ..
+        } => (*from, *to, *center, *plane, *sweep),
+        other => panic!("not an arc: {other:?}"),
+    }
+}
+
+/// A pseudo-random program text for the no-panic tests: `head`, then `len` bytes drawn
+/// from `alphabet` by a 32-bit xorshift started from `seed · 2654435761 + salt`.
+pub fn random_text(seed: u32, salt: u32, head: &[u8], len: usize, alphabet: &[u8]) -> String {
+    let mut x = seed.wrapping_mul(2_654_435_761).wrapping_add(salt);
+    let mut bytes = head.to_vec();
+    for _ in 0..len {
+        x ^= x << 13;
+        x ^= x >> 17;
+        x ^= x << 5;
+        bytes.push(alphabet[(x as usize) % alphabet.len()]);
+    }
+    String::from_utf8_lossy(&bytes).into_owned()
 }
 
 /// Asserts two numbers agree within 1e-9.
