@@ -14,13 +14,19 @@ const A: f64 = 1000.0;
 const J: f64 = 1e5;
 
 /// Duration of the time-optimal jerk-limited change of speed between rest and `v` (at rest
-/// in acceleration at both ends; with or without a stretch at the acceleration limit).
-fn ramp_time(v: f64) -> f64 {
-    if v >= A * A / J {
-        v / A + A / J
+/// in acceleration at both ends; with or without a stretch at the acceleration limit) with
+/// path acceleration `a` and jerk `j`.
+fn ramp_with(v: f64, a: f64, j: f64) -> f64 {
+    if v >= a * a / j {
+        v / a + a / j
     } else {
-        2.0 * (v / J).sqrt()
+        2.0 * (v / j).sqrt()
     }
+}
+
+/// [`ramp_with`] at the axes' own limits.
+fn ramp_time(v: f64) -> f64 {
+    ramp_with(v, A, J)
 }
 
 /// Time-optimal jerk-limited time of a straight stretch of `length` at feed `v`, from rest
@@ -156,15 +162,9 @@ fn a_lift_after_a_sloped_pass_overlaps_the_stop_sharing_z() {
     let (pass_a, pass_j) = (A / ux, J / ux);
     let lowered = 1.0 - 1.5 * uz / ux;
     let (lift_a, lift_j) = (A * lowered, J * lowered);
-    let ramp = |v: f64, a: f64, j: f64| {
-        if v >= a * a / j {
-            v / a + a / j
-        } else {
-            2.0 * (v / j).sqrt()
-        }
-    };
     let v2 = 400.0 / 60.0;
-    let stop = length / 40.0 + ramp(40.0, pass_a, pass_j) + 1.0 / v2 + ramp(v2, lift_a, lift_j);
+    let stop =
+        length / 40.0 + ramp_with(40.0, pass_a, pass_j) + 1.0 / v2 + ramp_with(v2, lift_a, lift_j);
     // The overlap: the pass's last 0.01 mm in the final jerk phase of its stop, the lift's
     // first 0.01 mm of its S-curve (its first half covers j·t³/6 = 0.0091 mm with the
     // lowered jerk; the rest of the way at about half the feed).
