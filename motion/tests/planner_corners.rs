@@ -81,22 +81,23 @@ fn stepover(tol: f64) -> (Run, f64) {
     corner(corner_at, 40.0, top, 400.0 / 60.0, tol)
 }
 
-/// Time the jerk-limited departure from rest towards `v` (time-optimal, as in
-/// [`ramp_time`]) takes to cover `d` mm, when `v` is reached over more than `d`: the first
-/// half of the S-curve covers J·t³/6, the second half is found by bisection.
-fn departure_time(d: f64, v: f64) -> f64 {
+/// Time the jerk-limited departure from rest towards `v` with path acceleration `a` and
+/// jerk `j` (time-optimal, as in [`ramp_with`]) takes to cover `d` mm, when `v` is reached
+/// over more than `d`: the first half of the S-curve covers j·t³/6, the second half is
+/// found by bisection.
+fn departure_time(d: f64, v: f64, a: f64, j: f64) -> f64 {
     assert!(
-        v < A * A / J,
+        v < a * a / j,
         "only the ramp without a stretch at the acceleration limit"
     );
-    let half = (v / J).sqrt();
+    let half = (v / j).sqrt();
     let distance = |t: f64| {
         if t <= half {
-            J * t.powi(3) / 6.0
+            j * t.powi(3) / 6.0
         } else {
             let u = t - half;
-            let peak = J * half;
-            J * half.powi(3) / 6.0 + v / 2.0 * u + peak * u * u / 2.0 - J * u.powi(3) / 6.0
+            let peak = j * half;
+            j * half.powi(3) / 6.0 + v / 2.0 * u + peak * u * u / 2.0 - j * u.powi(3) / 6.0
         }
     };
     let (mut lo, mut hi) = (0.0, 2.0 * half);
@@ -133,13 +134,19 @@ fn a_stepover_in_a_tight_band_overlaps_the_stop_at_the_corner() {
     // (J·t³/6 = 0.01: 8.43 ms), Z's start its first 0.01 mm in 8.44 ms; Z may start that
     // much before X stands still, rounded to whole periods.
     let brake_tail = (6.0 * tol / J).cbrt();
-    let overlap = brake_tail + departure_time(tol, 400.0 / 60.0);
+    let overlap = brake_tail + departure_time(tol, 400.0 / 60.0, A, J);
     assert!((overlap - 0.01687).abs() < 1e-4, "{overlap}");
+    assert_saved(&r, bound, overlap);
+}
+
+/// Asserts that the run took the time `stop` of stopping at the corner less `overlap`,
+/// rounded to whole periods (up to two periods less, one more).
+fn assert_saved(r: &Run, stop: f64, overlap: f64) {
     let t = r.samples.last().map_or(0.0, |s| s.t);
-    let saved = bound - t;
+    let saved = stop - t;
     assert!(
         saved >= overlap - 0.002 - 1e-9 && saved <= overlap + 0.001,
-        "{t} s: {saved} s saved against the exact stop's {bound} s, the overlap allows {overlap} s"
+        "{t} s: {saved} s saved against the exact stop's {stop} s, the overlap allows {overlap} s"
     );
 }
 
@@ -166,20 +173,10 @@ fn a_lift_after_a_sloped_pass_overlaps_the_stop_sharing_z() {
     let stop =
         length / 40.0 + ramp_with(40.0, pass_a, pass_j) + 1.0 / v2 + ramp_with(v2, lift_a, lift_j);
     // The overlap: the pass's last 0.01 mm in the final jerk phase of its stop, the lift's
-    // first 0.01 mm of its S-curve (its first half covers j·t³/6 = 0.0091 mm with the
-    // lowered jerk; the rest of the way at about half the feed).
+    // first 0.01 mm of its S-curve with the lowered limits.
     let brake_tail = (6.0 * tol / pass_j).cbrt();
-    let half = (v2 / lift_j).sqrt();
-    let first_half = lift_j * half.powi(3) / 6.0;
-    assert!(first_half < tol);
-    let start = half + (tol - first_half) / (v2 / 2.0);
-    let overlap = brake_tail + start;
-    let t = r.samples.last().map_or(0.0, |s| s.t);
-    let saved = stop - t;
-    assert!(
-        saved >= overlap - 0.002 - 1e-9 && saved <= overlap + 0.001,
-        "{t} s: {saved} s saved against the exact stop's {stop} s, the overlap allows {overlap} s"
-    );
+    let overlap = brake_tail + departure_time(tol, v2, lift_a, lift_j);
+    assert_saved(&r, stop, overlap);
 }
 
 #[test]
