@@ -7,6 +7,7 @@ mod common;
 
 use common::*;
 use klar_interp::{Feed, Pose};
+use klar_motion::blend::corner::TOLERANCE_SHARE;
 
 /// Bench limits: 100 mm/s, 1000 mm/s², 1e5 mm/s³ per axis.
 const V: f64 = 100.0;
@@ -130,12 +131,14 @@ fn a_stepover_in_a_tight_band_overlaps_the_stop_at_the_corner() {
     // rest: 10/40 + 0.05 s and 1/6.667 + 0.01633 s.
     let bound = stretch_time(10.0, 40.0) + stretch_time(1.0, 400.0 / 60.0);
     assert!((bound - 0.466330).abs() < 1e-5, "{bound}");
-    // The overlap: X's braking covers its last 0.01 mm in the final jerk phase of its stop
-    // (J·t³/6 = 0.01: 8.43 ms), Z's start its first 0.01 mm in 8.44 ms; Z may start that
-    // much before X stands still, rounded to whole periods.
-    let brake_tail = (6.0 * tol / J).cbrt();
-    let overlap = brake_tail + departure_time(tol, 400.0 / 60.0, A, J);
-    assert!((overlap - 0.01687).abs() < 1e-4, "{overlap}");
+    // The overlap: X's braking covers the last 0.009 mm (the share of the band a blend may
+    // use too) in the final jerk phase of its stop (J·t³/6 = 0.009: 8.14 ms), Z's start its
+    // first 0.009 mm in 8.15 ms; Z may start that much before X stands still, rounded to
+    // whole periods.
+    let band = TOLERANCE_SHARE * tol;
+    let brake_tail = (6.0 * band / J).cbrt();
+    let overlap = brake_tail + departure_time(band, 400.0 / 60.0, A, J);
+    assert!((overlap - 0.01629).abs() < 1e-4, "{overlap}");
     assert_saved(&r, bound, overlap);
 }
 
@@ -172,10 +175,11 @@ fn a_lift_after_a_sloped_pass_overlaps_the_stop_sharing_z() {
     let v2 = 400.0 / 60.0;
     let stop =
         length / 40.0 + ramp_with(40.0, pass_a, pass_j) + 1.0 / v2 + ramp_with(v2, lift_a, lift_j);
-    // The overlap: the pass's last 0.01 mm in the final jerk phase of its stop, the lift's
-    // first 0.01 mm of its S-curve with the lowered limits.
-    let brake_tail = (6.0 * tol / pass_j).cbrt();
-    let overlap = brake_tail + departure_time(tol, v2, lift_a, lift_j);
+    // The overlap: the pass's last 0.009 mm in the final jerk phase of its stop, the lift's
+    // first 0.009 mm of its S-curve with the lowered limits.
+    let band = TOLERANCE_SHARE * tol;
+    let brake_tail = (6.0 * band / pass_j).cbrt();
+    let overlap = brake_tail + departure_time(band, v2, lift_a, lift_j);
     assert_saved(&r, stop, overlap);
 }
 
