@@ -7,6 +7,7 @@ mod common;
 
 use common::*;
 use klar_interp::{Feed, Pose};
+use klar_motion::blend::corner::TOLERANCE_SHARE;
 
 /// Bench limits: 100 mm/s, 1000 mm/s², 1e5 mm/s³ per axis.
 const V: f64 = 100.0;
@@ -14,13 +15,19 @@ const A: f64 = 1000.0;
 const J: f64 = 1e5;
 
 /// Duration of the time-optimal jerk-limited change of speed between rest and `v` (at rest
-/// in acceleration at both ends; with or without a stretch at the acceleration limit).
-fn ramp_time(v: f64) -> f64 {
-    if v >= A * A / J {
-        v / A + A / J
+/// in acceleration at both ends; with or without a stretch at the acceleration limit) with
+/// path acceleration `a` and jerk `j`.
+fn ramp_with(v: f64, a: f64, j: f64) -> f64 {
+    if v >= a * a / j {
+        v / a + a / j
     } else {
-        2.0 * (v / J).sqrt()
+        2.0 * (v / j).sqrt()
     }
+}
+
+/// [`ramp_with`] at the axes' own limits.
+fn ramp_time(v: f64) -> f64 {
+    ramp_with(v, A, J)
 }
 
 /// Time-optimal jerk-limited time of a straight stretch of `length` at feed `v`, from rest
@@ -75,22 +82,23 @@ fn stepover(tol: f64) -> (Run, f64) {
     corner(corner_at, 40.0, top, 400.0 / 60.0, tol)
 }
 
-/// Time the jerk-limited departure from rest towards `v` (time-optimal, as in
-/// [`ramp_time`]) takes to cover `d` mm, when `v` is reached over more than `d`: the first
-/// half of the S-curve covers J·t³/6, the second half is found by bisection.
-fn departure_time(d: f64, v: f64) -> f64 {
+/// Time the jerk-limited departure from rest towards `v` with path acceleration `a` and
+/// jerk `j` (time-optimal, as in [`ramp_with`]) takes to cover `d` mm, when `v` is reached
+/// over more than `d`: the first half of the S-curve covers j·t³/6, the second half is
+/// found by bisection.
+fn departure_time(d: f64, v: f64, a: f64, j: f64) -> f64 {
     assert!(
-        v < A * A / J,
+        v < a * a / j,
         "only the ramp without a stretch at the acceleration limit"
     );
-    let half = (v / J).sqrt();
+    let half = (v / j).sqrt();
     let distance = |t: f64| {
         if t <= half {
-            J * t.powi(3) / 6.0
+            j * t.powi(3) / 6.0
         } else {
             let u = t - half;
-            let peak = J * half;
-            J * half.powi(3) / 6.0 + v / 2.0 * u + peak * u * u / 2.0 - J * u.powi(3) / 6.0
+            let peak = j * half;
+            j * half.powi(3) / 6.0 + v / 2.0 * u + peak * u * u / 2.0 - j * u.powi(3) / 6.0
         }
     };
     let (mut lo, mut hi) = (0.0, 2.0 * half);
@@ -123,17 +131,25 @@ fn a_stepover_in_a_tight_band_overlaps_the_stop_at_the_corner() {
     // rest: 10/40 + 0.05 s and 1/6.667 + 0.01633 s.
     let bound = stretch_time(10.0, 40.0) + stretch_time(1.0, 400.0 / 60.0);
     assert!((bound - 0.466330).abs() < 1e-5, "{bound}");
-    // The overlap: X's braking covers its last 0.01 mm in the final jerk phase of its stop
-    // (J·t³/6 = 0.01: 8.43 ms), Z's start its first 0.01 mm in 8.44 ms; Z may start that
-    // much before X stands still, rounded to whole periods.
-    let brake_tail = (6.0 * tol / J).cbrt();
-    let overlap = brake_tail + departure_time(tol, 400.0 / 60.0);
-    assert!((overlap - 0.01687).abs() < 1e-4, "{overlap}");
+    // The overlap: X's braking covers the last 0.009 mm (the share of the band a blend may
+    // use too) in the final jerk phase of its stop (J·t³/6 = 0.009: 8.14 ms), Z's start its
+    // first 0.009 mm in 8.15 ms; Z may start that much before X stands still, rounded to
+    // whole periods.
+    let band = TOLERANCE_SHARE * tol;
+    let brake_tail = (6.0 * band / J).cbrt();
+    let overlap = brake_tail + departure_time(band, 400.0 / 60.0, A, J);
+    assert!((overlap - 0.01629).abs() < 1e-4, "{overlap}");
+    assert_saved(&r, bound, overlap);
+}
+
+/// Asserts that the run took the time `stop` of stopping at the corner less `overlap`,
+/// rounded to whole periods (up to two periods less, one more).
+fn assert_saved(r: &Run, stop: f64, overlap: f64) {
     let t = r.samples.last().map_or(0.0, |s| s.t);
-    let saved = bound - t;
+    let saved = stop - t;
     assert!(
         saved >= overlap - 0.002 - 1e-9 && saved <= overlap + 0.001,
-        "{t} s: {saved} s saved against the exact stop's {bound} s, the overlap allows {overlap} s"
+        "{t} s: {saved} s saved against the exact stop's {stop} s, the overlap allows {overlap} s"
     );
 }
 
@@ -156,30 +172,15 @@ fn a_lift_after_a_sloped_pass_overlaps_the_stop_sharing_z() {
     let (pass_a, pass_j) = (A / ux, J / ux);
     let lowered = 1.0 - 1.5 * uz / ux;
     let (lift_a, lift_j) = (A * lowered, J * lowered);
-    let ramp = |v: f64, a: f64, j: f64| {
-        if v >= a * a / j {
-            v / a + a / j
-        } else {
-            2.0 * (v / j).sqrt()
-        }
-    };
     let v2 = 400.0 / 60.0;
-    let stop = length / 40.0 + ramp(40.0, pass_a, pass_j) + 1.0 / v2 + ramp(v2, lift_a, lift_j);
-    // The overlap: the pass's last 0.01 mm in the final jerk phase of its stop, the lift's
-    // first 0.01 mm of its S-curve (its first half covers j·t³/6 = 0.0091 mm with the
-    // lowered jerk; the rest of the way at about half the feed).
-    let brake_tail = (6.0 * tol / pass_j).cbrt();
-    let half = (v2 / lift_j).sqrt();
-    let first_half = lift_j * half.powi(3) / 6.0;
-    assert!(first_half < tol);
-    let start = half + (tol - first_half) / (v2 / 2.0);
-    let overlap = brake_tail + start;
-    let t = r.samples.last().map_or(0.0, |s| s.t);
-    let saved = stop - t;
-    assert!(
-        saved >= overlap - 0.002 - 1e-9 && saved <= overlap + 0.001,
-        "{t} s: {saved} s saved against the exact stop's {stop} s, the overlap allows {overlap} s"
-    );
+    let stop =
+        length / 40.0 + ramp_with(40.0, pass_a, pass_j) + 1.0 / v2 + ramp_with(v2, lift_a, lift_j);
+    // The overlap: the pass's last 0.009 mm in the final jerk phase of its stop, the lift's
+    // first 0.009 mm of its S-curve with the lowered limits.
+    let band = TOLERANCE_SHARE * tol;
+    let brake_tail = (6.0 * band / pass_j).cbrt();
+    let overlap = brake_tail + departure_time(band, v2, lift_a, lift_j);
+    assert_saved(&r, stop, overlap);
 }
 
 #[test]

@@ -104,18 +104,8 @@ pub fn share_corner(
 
 #[cfg(test)]
 mod tests {
+    use super::super::test_machine::limits as bench;
     use super::*;
-
-    fn bench() -> [Option<AxisLimits>; 9] {
-        let l = AxisLimits {
-            max_velocity: 100.0,
-            max_acceleration: 1000.0,
-            max_jerk: 1e5,
-        };
-        let mut limits = [None; 9];
-        limits[..3].fill(Some(l));
-        limits
-    }
 
     fn unit(x: f64, y: f64, z: f64) -> [f64; 9] {
         let n = (x * x + y * y + z * z).sqrt();

@@ -16,7 +16,9 @@
 //! * **Turn.** The path turns by at most 150°: a line travelled back (a plunge and its
 //!   retract) reaches its end.
 //! * **Band.** Every combined sample is the braking's point plus the departure's offset
-//!   from the corner, and must lie within the band of the programmed contour. Where the
+//!   from the corner, and must lie within the band of the programmed contour (within the
+//!   share of it a blend may use, [`TOLERANCE_SHARE`]: the rest covers the way between
+//!   samples). Where the
 //!   elements on either side are lines, its distance from them is computed; otherwise it
 //!   is bounded: where the braking's point lies on a programmed element (not on a blend),
 //!   the combined sample lies within the departure's distance from the corner of the
@@ -37,6 +39,7 @@
 
 use super::path::Shape;
 use super::{Marker, Planner, Sample, Step};
+use crate::blend::corner::TOLERANCE_SHARE;
 use crate::config::AxisLimits;
 use klar_interp::Pose;
 use std::collections::VecDeque;
@@ -212,7 +215,7 @@ impl Overlap {
             .rev()
             .find(|&k| {
                 self.tail[m - k + 1..].iter().zip(&self.head).all(|(b, d)| {
-                    let band = sc.band;
+                    let band = TOLERANCE_SHARE * sc.band;
                     let within = (b.on_contour && offset(d, &corner) <= band)
                         || (d.on_contour && offset(b, &corner) <= band)
                         || sc.distance(&combined(b, d, &corner), &corner) <= band;

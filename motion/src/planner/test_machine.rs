@@ -5,8 +5,8 @@ use super::Planner;
 use crate::config::{AxisLimits, PlannerConfig};
 use klar_interp::Pose;
 
-/// A planner for the test machine, standing at the origin.
-pub(super) fn planner() -> Planner {
+/// The test machine's axis limits.
+pub(super) fn limits() -> [Option<AxisLimits>; 9] {
     let l = AxisLimits {
         max_velocity: 100.0,
         max_acceleration: 1000.0,
@@ -14,8 +14,13 @@ pub(super) fn planner() -> Planner {
     };
     let mut limits = [None; 9];
     limits[..3].fill(Some(l));
+    limits
+}
+
+/// A planner for the test machine, standing at the origin.
+pub(super) fn planner() -> Planner {
     let config = PlannerConfig {
-        limits,
+        limits: limits(),
         period: 0.001,
         tolerance: 0.01,
     };
