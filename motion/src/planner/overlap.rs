@@ -52,9 +52,13 @@ const TAIL_SAMPLES: usize = 256;
 const HEAD_SAMPLES: usize = 64;
 
 /// Periods of travel at the current speed, beyond the band, from which the planner starts
-/// keeping the braking's samples back (the departure's part within the band takes at most
-/// this many periods to overlap with the braking's part before the band).
-const LEAD_PERIODS: f64 = 48.0;
+/// keeping the braking's samples back. Braking to rest takes about twice as many periods
+/// as its remaining distance over its speed, so the braking's last 30 periods or so are
+/// kept: more than the departure's part within the band (about 8 periods at the bench
+/// machine's limits) and the braking's within it together with the three periods kept as
+/// planned on either side. Fewer periods kept back means a feed hold asked for meanwhile
+/// acts sooner.
+const LEAD_PERIODS: f64 = 16.0;
 
 /// Cosine of the sharpest turn that is overlapped (150°). A turn back on itself, or
 /// nearly, is crossed standing still: the path's far end (the bottom of a plunge, the end
@@ -511,7 +515,8 @@ impl Planner {
 
     /// The corner ahead (path position and band) when the state closes in on a stop that
     /// may be overlapped: the next marker is such a stop, no feed hold is asked for, TCPM is
-    /// off, no other marker lies on the corner, and the stop is within the band plus [`LEAD_PERIODS`] periods' travel.
+    /// off, no other marker lies on the corner, and the stop is within the band plus
+    /// [`LEAD_PERIODS`] periods' travel.
     fn corner_close(&self) -> Option<(f64, StopCorner)> {
         if self.held || self.hold_pending() || self.tcpm || self.hold_until.is_some() {
             return None;
