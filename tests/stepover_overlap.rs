@@ -74,8 +74,8 @@ fn a_stepover_crosses_its_corners_within_the_band_and_the_limits() {
     let n = cols[0].len();
     let mut worst = 0.0f64;
     let mut closest = [f64::INFINITY; 4];
-    for i in 0..n {
-        let p = [cols[0][i], cols[1][i], cols[2][i]];
+    for ((x, y), z) in cols[0].iter().zip(&cols[1]).zip(&cols[2]) {
+        let p = [*x, *y, *z];
         let off = POLYLINE
             .windows(2)
             .map(|w| to_segment(p, w[0], w[1]))
