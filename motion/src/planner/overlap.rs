@@ -1,34 +1,35 @@
 //! Crossing a stop corner without standing still.
 //!
 //! A sharp corner whose blend would crawl is an exact stop (see `corner_stop`): the path
-//! brakes to rest on the corner, then speeds up along the next element. Where the axes
-//! that brake are not the axes that start, the second motion may begin before the first
-//! has ended, as long as the tool stays within the corner's tolerance band: the samples
-//! of the last part of the braking and of the first part of the speeding up are added
-//! together (each as a displacement from the corner), and the time they overlap is saved.
+//! brakes to rest on the corner, then speeds up along the next element. The second motion
+//! may begin before the first has ended, as long as the tool stays within the corner's
+//! tolerance band and every axis within its limits: the samples of the last part of the
+//! braking and of the first part of the speeding up are added together (each as a
+//! displacement from the corner), and the time they overlap is saved.
 //!
 //! Only corners between elements on the linear axes are crossed so (no rotary axis turns on
-//! either side: its degrees do not measure against a band in millimetres). The rules,
-//! checked on the samples themselves:
+//! either side: its degrees do not measure against a band in millimetres), and only where
+//! no event or other stop lies on the corner and no feed hold is asked for. The rules,
+//! checked on the samples themselves for each number of periods the departure may start
+//! early, the largest that keeps them all being taken:
+//! * **Band.** Every combined sample is the braking's point plus the departure's offset
+//!   from the corner, and must lie within the share of the band a blend may use
+//!   ([`TOLERANCE_SHARE`]: the rest covers the way between samples). Where the elements on
+//!   either side are lines, its distance from them is computed; otherwise it is bounded:
+//!   where the braking's point lies on a programmed element (not on a blend), the combined
+//!   sample lies within the departure's distance from the corner of the contour, and where
+//!   the departure's point does, within the braking's distance.
+//! * **Axes.** Every axis keeps its velocity, acceleration and jerk limits judged as a
+//!   trace is, by the first, second and third differences of the positions over the
+//!   changed samples and three on either side. An axis that moves in only one of the two
+//!   motions follows that motion shifted in time, within its limits as planned; an axis
+//!   that moves in both (the slope of a finishing pass and the lift after it) gets the sum
+//!   of the two, which `corner_share` makes room for when the corner is committed.
 //! * **Feed.** Each block's own motion keeps its feed, as planned. A combined sample moves
 //!   both blocks at once; its speed stays within the higher of their speed limits (feed
 //!   with the override), and it belongs to that block (the departure's on a tie).
 //! * **Turn.** The path turns by at most 150°: a line travelled back (a plunge and its
 //!   retract) reaches its end.
-//! * **Band.** Every combined sample is the braking's point plus the departure's offset
-//!   from the corner, and must lie within the band of the programmed contour (within the
-//!   share of it a blend may use, [`TOLERANCE_SHARE`]: the rest covers the way between
-//!   samples). Where the
-//!   elements on either side are lines, its distance from them is computed; otherwise it
-//!   is bounded: where the braking's point lies on a programmed element (not on a blend),
-//!   the combined sample lies within the departure's distance from the corner of the
-//!   contour, and where the departure's point does, within the braking's distance.
-//! * **Axes.** Every axis keeps its velocity and acceleration limits at each combined
-//!   sample and its jerk limit over each period (the change of acceleration), from two
-//!   periods before the overlap to two after it. An axis that moves in only one of the two
-//!   motions follows that motion shifted in time, within its limits as planned; an axis
-//!   that moves in both (the slope of a finishing pass and the lift after it) gets the sum
-//!   of the two, which is checked.
 //!
 //! Nothing else changes: the braking and the departure are those the speed generator
 //! planned. The combination needs the samples of the departure before the end of the
