@@ -408,15 +408,7 @@ impl<'a> MachineChecks<'a> {
                 let Some(step) = planner.next_step() else {
                     break;
                 };
-                follow(
-                    &mut self.command,
-                    self.path,
-                    &step,
-                    report,
-                    &mut self.event_rpm,
-                    self.config,
-                );
-                if self.over_limit(&step, report) {
+                if self.take(&step, report) {
                     return;
                 }
             }
@@ -429,17 +421,23 @@ impl<'a> MachineChecks<'a> {
         };
         planner.finish();
         while let Some(step) = self.planner.as_mut().and_then(Planner::next_step) {
-            follow(
-                &mut self.command,
-                self.path,
-                &step,
-                report,
-                &mut self.event_rpm,
-                self.config,
-            );
-            if self.over_limit(&step, report) {
+            if self.take(&step, report) {
                 break;
             }
         }
+    }
+
+    /// Follows one step of the planner and counts it; true when the test run gives up
+    /// there (see `over_limit`).
+    fn take(&mut self, step: &Step, report: &mut TestRunReport) -> bool {
+        follow(
+            &mut self.command,
+            self.path,
+            step,
+            report,
+            &mut self.event_rpm,
+            self.config,
+        );
+        self.over_limit(step, report)
     }
 }

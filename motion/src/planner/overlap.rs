@@ -125,8 +125,13 @@ enum Phase {
     Idle,
     /// Braking into the corner at `at` (path position).
     Braking { at: f64, corner: StopCorner },
-    /// The planner stood on the corner and departs from it.
-    Departing { at: f64, corner: StopCorner },
+    /// The planner stood on the corner and departs from it; `within` of the braking's
+    /// samples kept back lie within the band.
+    Departing {
+        at: f64,
+        corner: StopCorner,
+        within: usize,
+    },
 }
 
 /// The state of the overlap at corners (see the module documentation).
@@ -139,6 +144,8 @@ pub(super) struct Overlap {
     out: VecDeque<Step>,
     /// Set when the planner has passed the stop marker of the corner being braked for.
     passed: bool,
+    /// Departure samples kept back that lie beyond the band.
+    beyond: usize,
     /// Periods saved at corners so far.
     saved: u64,
 }
@@ -151,6 +158,7 @@ impl Default for Overlap {
             head: Vec::with_capacity(HEAD_SAMPLES),
             out: VecDeque::with_capacity(TAIL_SAMPLES + HEAD_SAMPLES + 2),
             passed: false,
+            beyond: 0,
             saved: 0,
         }
     }
@@ -196,6 +204,7 @@ impl Overlap {
         }
         self.phase = Phase::Idle;
         self.passed = false;
+        self.beyond = 0;
     }
 
     /// The largest number of periods by which the departure may start before the braking
@@ -338,6 +347,7 @@ impl Overlap {
         self.head.clear();
         self.phase = Phase::Idle;
         self.passed = false;
+        self.beyond = 0;
         self.saved += k as u64;
         k
     }
@@ -454,8 +464,15 @@ impl Planner {
                 }
                 Phase::Braking { at, corner } => match step {
                     Step::Sample(sample) if self.overlap.passed => {
-                        self.overlap.phase = Phase::Departing { at, corner };
-                        self.keep_departure(sample, at, &corner);
+                        let band = corner.band;
+                        let within = self
+                            .overlap
+                            .tail
+                            .iter()
+                            .filter(|k| k.distance <= band)
+                            .count();
+                        self.overlap.phase = Phase::Departing { at, corner, within };
+                        self.keep_departure(sample, at, &corner, within);
                     }
                     Step::Sample(sample) if self.overlap.tail.len() < TAIL_SAMPLES => {
                         self.overlap.tail.push(Kept {
@@ -467,8 +484,8 @@ impl Planner {
                     }
                     other => self.overlap.give_out_as_planned(Some(other)),
                 },
-                Phase::Departing { at, corner } => match step {
-                    Step::Sample(sample) => self.keep_departure(sample, at, &corner),
+                Phase::Departing { at, corner, within } => match step {
+                    Step::Sample(sample) => self.keep_departure(sample, at, &corner, within),
                     event => self.end_overlap(&corner, Some(event)),
                 },
             }
@@ -477,8 +494,10 @@ impl Planner {
 
     /// Keeps a sample of the departure from the corner at `at`; combines once more would
     /// not help.
-    fn keep_departure(&mut self, sample: Sample, at: f64, corner: &StopCorner) {
-        let band = corner.band;
+    ///
+    /// Departure samples beyond the band pair only with the `within` braking samples within
+    /// it, and three more stay as planned after the overlap (see `best_shift`).
+    fn keep_departure(&mut self, sample: Sample, at: f64, corner: &StopCorner, within: usize) {
         let distance = self.state.s - at;
         let (on_contour, limit) = (self.on_contour(), self.piece_limit());
         self.overlap.head.push(Kept {
@@ -487,21 +506,10 @@ impl Planner {
             on_contour,
             limit,
         });
-        // Departure samples beyond the band pair only with braking samples within it.
-        let within = self
-            .overlap
-            .tail
-            .iter()
-            .filter(|k| k.distance <= band)
-            .count();
-        let beyond = self
-            .overlap
-            .head
-            .iter()
-            .filter(|k| k.distance > band)
-            .count();
-        // Three more stay as planned after the overlap (see `best_shift`).
-        if beyond >= within + 3 || self.overlap.head.len() >= HEAD_SAMPLES {
+        if distance > corner.band {
+            self.overlap.beyond += 1;
+        }
+        if self.overlap.beyond >= within + 3 || self.overlap.head.len() >= HEAD_SAMPLES {
             self.end_overlap(corner, None);
         }
     }
