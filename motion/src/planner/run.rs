@@ -60,7 +60,7 @@ pub(super) fn try_run(
         let Some(after) = rest.get(j + 1).map(|w| &w.element) else {
             // The last line before a stop: the run may end at its end.
             let turn = angle(&prev, &dir);
-            if last && turn <= SPLIT_MAX_ANGLE && lj * turn <= 2.0 * t && reach + lj <= RUN_LENGTH {
+            if last && gentle(lj, turn, t) && reach + lj <= RUN_LENGTH {
                 to_stop = Some((j, t));
             }
             break;
