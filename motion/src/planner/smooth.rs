@@ -10,7 +10,8 @@
 //! So a split point is taken from a least-squares fit instead: each axis as a quadratic in
 //! the path distance along the polyline, over the vertices within [`SPAN`] on either side
 //! of the line's midpoint (at most [`LOOK`] a side), stopping at a vertex
-//! where the polyline turns more than a split point allows (a real corner). The fit's
+//! where the polyline turns more than a split point allows (a real corner) or where the
+//! chords taken would turn by more than a quadratic follows (`FIT_ARC`). The fit's
 //! position, unit tangent and curvature vector at the midpoint make the split point. The
 //! noise of a fit falls with the square of its span: over 0.5 mm a rounding of 1 µm leaves a
 //! curvature error of a few thousandths per mm. The fitted point may lie off the line by at
@@ -34,6 +35,12 @@ pub const SPAN_MAX: f64 = 2.0;
 /// Largest angle (radians) the polyline may turn between the line and a chord the fit
 /// takes: a quadratic follows a curve closely only while it turns little.
 const FIT_TURN: f64 = 0.15;
+
+/// Largest angle (radians) the polyline may turn between the line and any chord the fit
+/// takes, within the span too: round a tight arc (0.1 mm chords on R0.3, turning by a
+/// third of a radian each) the span of 0.5 mm holds most of a turn, which no quadratic
+/// follows; over ±0.3 rad one does to a fraction of a micrometre (r·θ³/6).
+const FIT_ARC: f64 = 0.6;
 
 /// Vertices a side the fit uses at most, which bounds the work per split point.
 pub const LOOK: usize = 96;
@@ -155,6 +162,7 @@ fn side<'a>(
     let mut count = 0;
     let cos_max = max_turn.cos();
     let cos_fit = (0.5 * FIT_TURN).cos();
+    let cos_arc = (0.5 * FIT_ARC).cos();
     vertices.take(LOOK).map_while(move |v| {
         if let Some(p) = prev {
             let mut d = [0.0; 9];
@@ -176,11 +184,13 @@ fn side<'a>(
         for ((o, a), b) in off.iter_mut().zip(&v.0).zip(&centre.0) {
             *o = a - b;
         }
-        if prev.is_some() && s > SPAN {
-            // Beyond the span only while too few vertices were taken, and while the
-            // polyline turns little: the secant from the centre turns by half the curve.
+        if prev.is_some() {
+            // Only while the polyline turns little (the secant from the centre turns by
+            // half the curve), and beyond the span only while too few vertices were taken.
             let secant = m.dot(&off, &first_dir) / m.norm(&off).max(f64::MIN_POSITIVE);
-            if count >= MIN_SIDE || s > SPAN_MAX || secant < cos_fit {
+            if secant < cos_arc
+                || s > SPAN && (count >= MIN_SIDE || s > SPAN_MAX || secant < cos_fit)
+            {
                 return None;
             }
         }
