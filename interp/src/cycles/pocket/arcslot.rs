@@ -26,9 +26,9 @@
 //! forth and back per infeed. The meaning of Q367 = 1…3 is this module's reading of the
 //! manual's "left/right slot circle".
 
-use super::super::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
+use super::super::{CycleContext, CycleError, CycleFeed, Move};
 use super::geom::{EPS, Frame, Path, Seg, check_size, steps_down};
-use super::params::{Params, modal_feed, pocket_ccw};
+use super::params::{Feeds, Heights, Params, pocket_ccw};
 
 /// A point on the circle of radius `r` about `c` at angle `a` (radians).
 fn polar(c: [f64; 2], r: f64, a: f64) -> [f64; 2] {
@@ -133,37 +133,29 @@ pub(super) fn circular_slot(
     } else {
         p.choice(377, reps, 99_999, "1 to 99999")?
     };
-    let depth = p.q(201, "depth")?;
-    if depth > 0.0 {
-        return Err(p.range(ParamKey::Q(201), depth, "negative (0 skips the cycle)"));
-    }
-    let surface = p.q(203, "workpiece surface coordinate")?;
-    let infeed = p.q(202, "plunging depth")?;
-    p.check(202, infeed, EPS, f64::MAX, "greater than 0")?;
-    let finish_infeed = p.check(338, p.q_or(338, 0.0), 0.0, f64::MAX, "0 or more")?;
-    let clear = p.check(200, p.q_or(200, 2.0), 0.0, f64::MAX, "0 or more")?;
-    let clear2 = p
-        .check(204, p.q_or(204, 50.0), 0.0, f64::MAX, "0 or more")?
-        .max(clear);
+    let Heights {
+        depth,
+        surface,
+        infeed,
+        finish_infeed,
+        clear,
+        clear2,
+    } = p.heights()?;
     let floor = p.check(369, p.q_or(369, 0.0), 0.0, f64::MAX, "0 or more")?;
     let overlap = p.check(370, p.q_or(370, 1.0), 0.1, 1.9999, "0.1 to 1.9999")?;
     let ramp = p.choice(366, p.q_or(366, 1.0), 2, "0, 1 or 2")? != 0;
     let ccw = pocket_ccw(p.q_or(351, 1.0), ctx.spindle);
-    let f_mill = p.feed_or(207, modal_feed(ctx))?;
-    let f_plunge = p.feed_or(206, f_mill)?;
-    let f_finish = p.feed_or(385, f_mill)?;
+    let Feeds {
+        mill: f_mill,
+        plunge: f_plunge,
+        finish: f_finish,
+    } = p.feeds(ctx)?;
     if depth == 0.0 {
         return Ok(());
     }
-    let r = ctx.tool_radius;
+    let r = p.tool_radius(ctx)?;
     let w = width / 2.0;
     let rm = dia / 2.0;
-    if !(r.is_finite() && r > 0.0) {
-        return Err(CycleError::ToolRadius {
-            cycle: p.cycle,
-            radius: r,
-        });
-    }
     if w < r - EPS {
         return Err(p.geometry(format!(
             "the tool (diameter {}) is wider than the slot ({width})",
