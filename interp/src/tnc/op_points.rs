@@ -13,57 +13,24 @@ pub(super) fn map_points(
     point: impl Fn(&Pose) -> Pose,
     vector: impl Fn([f64; 3]) -> [f64; 3],
 ) -> Option<OpKind> {
-    Some(match kind {
-        OpKind::Line { from, to, feed } => OpKind::Line {
-            from: point(from),
-            to: point(to),
-            feed: *feed,
-        },
-        OpKind::Spline {
-            from,
-            to,
-            axes,
-            feed,
-        } => OpKind::Spline {
-            from: point(from),
-            to: point(to),
-            axes: map_spline(axes, vector),
-            feed: *feed,
-        },
-        OpKind::Approach {
-            from,
-            to,
-            shape,
-            side,
-            feed_to_aux,
-            feed,
-            plane,
-            with_tool_axis,
-        } => OpKind::Approach {
-            from: point(from),
-            to: point(to),
-            shape: *shape,
-            side: *side,
-            feed_to_aux: *feed_to_aux,
-            feed: *feed,
-            plane: *plane,
-            with_tool_axis: *with_tool_axis,
-        },
-        OpKind::Depart {
-            from,
-            to,
-            shape,
-            feed,
-            plane,
-        } => OpKind::Depart {
-            from: point(from),
-            to: to.as_ref().map(&point),
-            shape: *shape,
-            feed: *feed,
-            plane: *plane,
-        },
+    let mut out = kind.clone();
+    match &mut out {
+        OpKind::Line { from, to, .. } | OpKind::Approach { from, to, .. } => {
+            *from = point(from);
+            *to = point(to);
+        }
+        OpKind::Spline { from, to, axes, .. } => {
+            *from = point(from);
+            *to = point(to);
+            *axes = map_spline(axes, vector);
+        }
+        OpKind::Depart { from, to, .. } => {
+            *from = point(from);
+            *to = to.as_ref().map(&point);
+        }
         _ => return None,
-    })
+    }
+    Some(out)
 }
 
 /// Spline coefficients with the X, Y, Z coefficients of each power of t taken as a vector

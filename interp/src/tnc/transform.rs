@@ -306,25 +306,6 @@ mod tests {
         a.0.iter().zip(b.0.iter()).all(|(x, y)| (x - y).abs() < EPS)
     }
 
-    /// An arc op from `from` to `to` about `center` in `plane`.
-    fn arc_op(
-        from: Pose,
-        to: Pose,
-        center: [f64; 2],
-        plane: Plane,
-        sweep: f64,
-        feed: Feed,
-    ) -> OpKind {
-        OpKind::Arc {
-            from,
-            to,
-            center,
-            plane,
-            sweep,
-            feed,
-        }
-    }
-
     /// Datum shift (10, 20, 5), rotation 30° in XY, scale 0.5, mirror X: every corner of the
     /// square (0,0)-(40,0)-(40,40)-(0,40) at Z-2 against the chain written out by hand:
     /// scale → (x/2, y/2, -1); rotate 30° → (x' cos30 − y' sin30, x' sin30 + y' cos30);
@@ -365,14 +346,14 @@ mod tests {
             mirror: [true, false, false],
             ..Transform::default()
         };
-        let arc = arc_op(
-            Pose::xyz(10.0, 0.0, 0.0),
-            Pose::xyz(0.0, 10.0, 0.0),
-            [0.0, 0.0],
-            Plane::XY,
-            90.0,
-            Feed::Rate(10.0),
-        );
+        let arc = OpKind::Arc {
+            from: Pose::xyz(10.0, 0.0, 0.0),
+            to: Pose::xyz(0.0, 10.0, 0.0),
+            center: [0.0, 0.0],
+            plane: Plane::XY,
+            sweep: 90.0,
+            feed: Feed::Rate(10.0),
+        };
         let OpKind::Arc {
             from,
             to,
@@ -428,14 +409,14 @@ mod tests {
             rot: 90.0,
             ..Transform::default()
         };
-        let arc = arc_op(
-            Pose::xyz(20.0, 10.0, 0.0),
-            Pose::xyz(10.0, 20.0, 0.0),
-            [10.0, 10.0],
-            Plane::XY,
-            90.0,
-            Feed::Rapid,
-        );
+        let arc = OpKind::Arc {
+            from: Pose::xyz(20.0, 10.0, 0.0),
+            to: Pose::xyz(10.0, 20.0, 0.0),
+            center: [10.0, 10.0],
+            plane: Plane::XY,
+            sweep: 90.0,
+            feed: Feed::Rapid,
+        };
         let OpKind::Arc {
             from,
             center,
@@ -450,14 +431,14 @@ mod tests {
         assert!((center[0] + 10.0).abs() < EPS && (center[1] - 10.0).abs() < EPS);
         assert_eq!(sweep, 90.0);
         // an arc in another plane cannot follow a rotation in XY
-        let zx = arc_op(
-            Pose::xyz(20.0, 10.0, 0.0),
-            Pose::xyz(10.0, 20.0, 0.0),
-            [0.0, 0.0],
-            Plane::ZX,
-            90.0,
-            Feed::Rapid,
-        );
+        let zx = OpKind::Arc {
+            from: Pose::xyz(20.0, 10.0, 0.0),
+            to: Pose::xyz(10.0, 20.0, 0.0),
+            center: [0.0, 0.0],
+            plane: Plane::ZX,
+            sweep: 90.0,
+            feed: Feed::Rapid,
+        };
         assert!(t.map_op(&zx).is_err());
     }
 
@@ -479,25 +460,25 @@ mod tests {
         };
         // 10 + 2·(15 − 10) = 20
         assert!(close(&to, &Pose::xyz(20.0, 5.0, 0.0)));
-        let arc = arc_op(
-            Pose::xyz(20.0, 10.0, 0.0),
-            Pose::xyz(10.0, 20.0, 0.0),
-            [10.0, 10.0],
-            Plane::XY,
-            90.0,
-            Feed::Rapid,
-        );
+        let arc = OpKind::Arc {
+            from: Pose::xyz(20.0, 10.0, 0.0),
+            to: Pose::xyz(10.0, 20.0, 0.0),
+            center: [10.0, 10.0],
+            plane: Plane::XY,
+            sweep: 90.0,
+            feed: Feed::Rapid,
+        };
         let e = t.map_op(&arc).expect_err("ellipse refused");
         assert!(e.contains("different factors"), "{e}");
         // an arc in YZ is fine when Y and Z share their factor
-        let yz = arc_op(
-            Pose::xyz(0.0, 10.0, 0.0),
-            Pose::xyz(0.0, 0.0, 10.0),
-            [0.0, 0.0],
-            Plane::YZ,
-            90.0,
-            Feed::Rapid,
-        );
+        let yz = OpKind::Arc {
+            from: Pose::xyz(0.0, 10.0, 0.0),
+            to: Pose::xyz(0.0, 0.0, 10.0),
+            center: [0.0, 0.0],
+            plane: Plane::YZ,
+            sweep: 90.0,
+            feed: Feed::Rapid,
+        };
         assert!(t.map_op(&yz).is_ok());
     }
 
