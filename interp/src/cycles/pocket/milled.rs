@@ -32,7 +32,7 @@
 
 use super::super::{CycleContext, CycleError, CycleFeed, Move};
 use super::geom::{EPS, Frame, Path, RoundedRect, check_size, steps_down};
-use super::params::{Feeds, Heights, Params, pocket_ccw};
+use super::params::{Params, pocket_ccw};
 
 /// How the tool enters the material for roughing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -97,14 +97,7 @@ fn common(
     stepover_max: f64,
 ) -> Result<Option<Pocket>, CycleError> {
     let op = p.choice(215, p.q_or(215, 0.0), 2, "0, 1 or 2")?;
-    let Heights {
-        depth,
-        surface,
-        infeed,
-        finish_infeed,
-        clear,
-        clear2,
-    } = p.heights()?;
+    let h = p.heights()?;
     let side = p.check(368, p.q_or(368, 0.0), 0.0, f64::MAX, "0 or more")?;
     let floor = p.check(369, p.q_or(369, 0.0), 0.0, f64::MAX, "0 or more")?;
     let overlap = p.check(
@@ -121,12 +114,8 @@ fn common(
         1 => plunge_choices[1],
         _ => plunge_choices[2],
     };
-    let Feeds {
-        mill: f_mill,
-        plunge: f_plunge,
-        finish: f_finish,
-    } = p.feeds(ctx)?;
-    if depth == 0.0 {
+    let feeds = p.feeds(ctx)?;
+    if h.depth == 0.0 {
         return Ok(None);
     }
     let r = p.tool_radius(ctx)?;
@@ -140,7 +129,7 @@ fn common(
     if op != 2 && shape.half_min() < r + side - EPS {
         return Err(p.geometry("the side allowance Q368 leaves no room for the tool"));
     }
-    if -depth < floor - EPS && op != 2 {
+    if -h.depth < floor - EPS && op != 2 {
         return Err(p.geometry("the floor allowance Q369 is larger than the depth"));
     }
     Ok(Some(Pocket {
@@ -148,20 +137,20 @@ fn common(
         shape,
         frame,
         op,
-        surface,
-        depth,
-        infeed,
-        finish_infeed,
-        clear,
-        clear2,
+        surface: h.surface,
+        depth: h.depth,
+        infeed: h.infeed,
+        finish_infeed: h.finish_infeed,
+        clear: h.clear,
+        clear2: h.clear2,
         side,
         floor,
         stepover: overlap * 2.0 * r,
         ccw: pocket_ccw(q351, ctx.spindle),
         plunge,
-        f_plunge,
-        f_mill,
-        f_finish,
+        f_plunge: feeds.plunge,
+        f_mill: feeds.mill,
+        f_finish: feeds.finish,
     }))
 }
 

@@ -24,7 +24,7 @@
 use super::super::{CycleContext, CycleError, CycleFeed, Move};
 use super::geom::{EPS, Frame, Path, RoundedRect, check_size, steps_down};
 use super::milled::{rect_outline, rect_sides};
-use super::params::{Feeds, Heights, Params, pocket_ccw};
+use super::params::{Params, pocket_ccw};
 
 /// A stud in its frame, with the blank around it.
 struct Stud {
@@ -112,23 +112,12 @@ pub(super) fn circ_stud(
 /// The common sequence.
 fn run(p: &Params, ctx: &CycleContext, stud: &Stud, out: &mut Vec<Move>) -> Result<(), CycleError> {
     let op = p.choice(215, p.q_or(215, 0.0), 2, "0, 1 or 2")?;
-    let Heights {
-        depth,
-        surface,
-        infeed,
-        finish_infeed,
-        clear,
-        clear2,
-    } = p.heights()?;
+    let h = p.heights()?;
     let side = p.check(368, p.q_or(368, 0.0), 0.0, f64::MAX, "0 or more")?;
     let overlap = p.check(370, p.q_or(370, 1.0), 0.1, 1.9999, "0.1 to 1.9999")?;
     let ccw = !pocket_ccw(p.q_or(351, 1.0), ctx.spindle);
-    let Feeds {
-        mill: f_mill,
-        plunge: f_plunge,
-        finish: f_finish,
-    } = p.feeds(ctx)?;
-    if depth == 0.0 {
+    let feeds = p.feeds(ctx)?;
+    if h.depth == 0.0 {
         return Ok(());
     }
     let r = p.tool_radius(ctx)?;
@@ -145,35 +134,35 @@ fn run(p: &Params, ctx: &CycleContext, stud: &Stud, out: &mut Vec<Move>) -> Resu
         .collect();
     let fin = stud.shape.offset(r);
     let reach = rings.first().map_or(fin.ha, |g| g.ha).max(fin.ha);
-    let start = [reach + clear, 0.0];
+    let start = [reach + h.clear, 0.0];
 
     let mut path = Path::new(out, stud.frame, ctx.pos);
-    let top = surface + clear;
-    let safe = surface + clear2;
-    let bottom = surface + depth;
+    let top = h.surface + h.clear;
+    let safe = h.surface + h.clear2;
+    let bottom = h.surface + h.depth;
     if ctx.pos[2] < safe {
         path.line_abs([ctx.pos[0], ctx.pos[1], safe], CycleFeed::Rapid);
     }
     path.line(start, ctx.pos[2].max(safe), CycleFeed::Rapid);
     path.line(start, top, CycleFeed::Rapid);
-    let levels = steps_down(surface, bottom, infeed);
+    let levels = steps_down(h.surface, bottom, h.infeed);
     check_size(p.cycle, 10.0 * (levels.len() * (rings.len() + 1)) as f64)?;
-    let finish_levels = steps_down(surface, bottom, finish_infeed);
+    let finish_levels = steps_down(h.surface, bottom, h.finish_infeed);
     check_size(p.cycle, 10.0 * finish_levels.len() as f64)?;
     if op != 2 {
         for z in levels {
-            path.line(start, z, f_plunge);
+            path.line(start, z, feeds.plunge);
             for ring in &rings {
-                path.ring(*ring, ccw, z, f_mill);
+                path.ring(*ring, ccw, z, feeds.mill);
             }
-            path.line(start, z, f_mill);
+            path.line(start, z, feeds.mill);
         }
     }
     if op != 1 && (side > 0.0 || op == 2) {
         for z in finish_levels {
-            path.line(start, z, f_plunge);
-            path.ring(fin, ccw, z, f_finish);
-            path.line(start, z, f_finish);
+            path.line(start, z, feeds.plunge);
+            path.ring(fin, ccw, z, feeds.finish);
+            path.line(start, z, feeds.finish);
         }
     }
     path.line(start, top, CycleFeed::Rapid);
