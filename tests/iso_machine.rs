@@ -228,18 +228,7 @@ fn g41_in_a_tilted_iso_plane_compensates_like_the_klartext_twin() {
             _ => None,
         })
         .collect();
-    let expect = [
-        [20.0, 10.0, 5.0],
-        [20.0, 10.0, -2.0],
-        [20.0, 5.0, -2.0],
-        [35.0, 5.0, -2.0],
-        [35.0, 15.0, -2.0],
-        [5.0, 15.0, -2.0],
-        [5.0, 5.0, -2.0],
-        [20.0, 5.0, -2.0],
-        [20.0, 10.0, -2.0],
-        [20.0, 10.0, 5.0],
-    ];
+    let expect = common::mill5::RECT_RL_CENTRE;
     assert_eq!(ends.len(), expect.len(), "{ends:?}");
     for (g, e) in ends.iter().zip(expect) {
         let w = common::mill5::rx(30.0, e);

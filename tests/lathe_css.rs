@@ -55,18 +55,8 @@ fn g96_face_cut_to_the_centre_follows_the_diameter_up_to_the_g26_limit() {
         .collect();
     let n_min = rows.iter().map(|&i| s[i]).fold(f64::INFINITY, f64::min);
     let tol = feed * 2.0 / 4096.0 + feed / 60.0 * 0.001 * (limit - n_min);
-    let mut off: f64 = 0.0;
-    let mut j = rows[0];
-    let last = *rows.last().unwrap_or(&0);
-    for &i in &rows {
-        while j <= last && a[j] - a[i] < 360.0 {
-            j += 1;
-        }
-        if j > last {
-            break;
-        }
-        off = off.max(((x[i] - x[j]) - feed * (a[j] - a[i]) / 360.0).abs());
-    }
+    // X (the radius) falls towards the centre: −F per revolution.
+    let off = common::per_revolution_error(&rows, &x, &a, -feed);
     assert!(
         off < tol,
         "radius per revolution off by {off} mm (tolerance {tol})"

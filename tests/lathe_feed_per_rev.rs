@@ -82,19 +82,8 @@ fn per_rev_error(trace: &Trace, f: f64, (z_lo, z_hi): (f64, f64)) -> (f64, f64, 
         "one pass"
     );
     assert!(rows.len() > 1000, "{} rows in the cut", rows.len());
-    let mut worst: f64 = 0.0;
-    let mut j = rows[0];
-    let last = *rows.last().unwrap_or(&0);
-    for &i in &rows {
-        while j <= last && a[j] - a[i] < 360.0 {
-            j += 1;
-        }
-        if j > last {
-            break;
-        }
-        let err = ((z[i] - z[j]) - f * (a[j] - a[i]) / 360.0).abs();
-        worst = worst.max(err);
-    }
+    // Z falls into the part: −F per revolution.
+    let worst = common::per_revolution_error(&rows, &z, &a, -f);
     let speeds: Vec<f64> = rows
         .iter()
         .filter(|&&i| i >= 10)
@@ -214,18 +203,7 @@ fn m136_feeds_the_mill_per_measured_revolution() {
     let fast = speeds.iter().copied().fold(0.0, f64::max);
     assert!(slow < 830.0, "the spindle dips: {slow} rpm");
     let tol = f * 2.0 / 4096.0 + f / 60.0 * 0.001 * (fast - slow);
-    let mut worst: f64 = 0.0;
-    let mut j = rows[0];
-    let last = *rows.last().unwrap_or(&0);
-    for &i in &rows {
-        while j <= last && a[j] - a[i] < 360.0 {
-            j += 1;
-        }
-        if j > last {
-            break;
-        }
-        worst = worst.max(((x[j] - x[i]) - f * (a[j] - a[i]) / 360.0).abs());
-    }
+    let worst = common::per_revolution_error(&rows, &x, &a, f);
     assert!(
         worst < tol,
         "X per revolution off by {worst} mm (tolerance {tol})"

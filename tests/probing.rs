@@ -5,7 +5,9 @@
 
 mod common;
 
-use common::probing::{OFF, ORIGIN, TURN, c400, close, program_text, turn};
+use common::probing::{
+    C410, OFF, ORIGIN, TURN, c400, close, preset1, program_of, program_text, turn,
+};
 
 use klar::config::MachineConfig;
 use klar_interp::Interpreter;
@@ -21,12 +23,6 @@ fn machine() -> MachineConfig {
     common::probing::machine("probing-mill.toml")
 }
 
-/// Program coordinates (preset 1, no basic rotation) of part point `q`.
-fn program_of(q: [f64; 2]) -> [f64; 2] {
-    let t = turn(q, TURN);
-    [OFF[0] + t[0], OFF[1] + t[1]]
-}
-
 /// Program coordinates of part point `q` once the basic rotation of 1.5° acts.
 fn aligned_of(q: [f64; 2]) -> [f64; 2] {
     let o = turn([OFF[0], OFF[1]], -TURN);
@@ -37,22 +33,6 @@ fn aligned_of(q: [f64; 2]) -> [f64; 2] {
 fn run_body(name: &str, body: &str) -> (Interpreter, PathBuf) {
     let (it, _, path) = common::probing::run_body(&machine(), "PROBE", name, body);
     (it, path)
-}
-
-/// Preset row 1 after the run: X, Y, Z and ROT.
-fn preset1(it: &Interpreter) -> ([f64; 3], f64) {
-    let (table, active) = it.presets();
-    assert_eq!(active, Some(1));
-    let t = table.expect("preset table");
-    let row = t.row(1).expect("row 1");
-    (
-        [
-            row[0].unwrap_or(0.0),
-            row[1].unwrap_or(0.0),
-            row[2].unwrap_or(0.0),
-        ],
-        t.rot(1),
-    )
 }
 
 #[test]
@@ -114,22 +94,7 @@ fn cycle_413_finds_the_boss_centre_and_diameter() {
 
 #[test]
 fn cycles_410_and_411_after_400_find_the_pocket_and_the_outline() {
-    let c410 = "TCH PROBE 410 PRESET INSIDE RECTAN. ~
-  Q321=+20 ;CENTER IN 1ST AXIS ~
-  Q322=-10 ;CENTER IN 2ND AXIS ~
-  Q323=+36 ;FIRST SIDE LENGTH ~
-  Q324=+28 ;2ND SIDE LENGTH ~
-  Q261=-10 ;MEASURING HEIGHT ~
-  Q320=+5 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q301=+0 ;MOVE TO CLEARANCE ~
-  Q305=+0 ;NUMBER IN TABLE ~
-  Q331=+0 ;DATUM ~
-  Q332=+0 ;DATUM ~
-  Q303=+1 ;MEAS. VALUE TRANSFER ~
-  Q381=+0 ;PROBE IN TS AXIS
-";
-    let (it, _) = run_body("probe410.h", &format!("{}{c410}", c400(0)));
+    let (it, _) = run_body("probe410.h", &format!("{}{C410}", c400(0)));
     let c = aligned_of([20.0, -10.0]);
     close("Q151", it.q(151), c[0], MM);
     close("Q152", it.q(152), c[1], MM);

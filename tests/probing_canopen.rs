@@ -7,7 +7,7 @@
 
 mod common;
 
-use common::probing::machine as load;
+use common::probing::{C410, machine as load};
 use klar::config::MachineConfig;
 use klar::runtime::RunReport;
 
@@ -130,29 +130,17 @@ fn cycle_412_takes_the_drive_latches_not_the_model() {
 
 #[test]
 fn cycle_410_takes_the_drive_latches_not_the_model() {
-    let text = "BEGIN PGM P410 MM
+    let text = format!(
+        "BEGIN PGM P410 MM
 BLK FORM 0.1 Z X-50 Y-40 Z-30
 BLK FORM 0.2 X+50 Y+40 Z+0
 TOOL CALL 1 Z S0
 L Z+50 R0 FMAX
-TCH PROBE 410 PRESET INSIDE RECTAN. ~
-  Q321=+20 ;CENTER IN 1ST AXIS ~
-  Q322=-10 ;CENTER IN 2ND AXIS ~
-  Q323=+36 ;FIRST SIDE LENGTH ~
-  Q324=+28 ;2ND SIDE LENGTH ~
-  Q261=-10 ;MEASURING HEIGHT ~
-  Q320=+5 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q301=+0 ;MOVE TO CLEARANCE ~
-  Q305=+0 ;NUMBER IN TABLE ~
-  Q331=+0 ;DATUM ~
-  Q332=+0 ;DATUM ~
-  Q303=+1 ;MEAS. VALUE TRANSFER ~
-  Q381=+0 ;PROBE IN TS AXIS
-L Z+50 FMAX
+{C410}L Z+50 FMAX
 END PGM P410 MM
-";
-    let path = common::temp_program("p410.h", text);
+"
+    );
+    let path = common::temp_program("p410.h", &text);
     let shift = [-0.5, 0.4, 0.0];
     let (result, _) = common::run(&path, &can_machine(shift));
     let report = result.expect("runs on the CANopen drives");

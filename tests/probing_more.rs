@@ -5,16 +5,11 @@
 
 mod common;
 
+use common::probing::{OFF, ORIGIN, TURN, close, edited, example_cycle, preset1, program_of, turn};
 use klar::config::MachineConfig;
 use klar_interp::{AxisLetter, Interpreter, OpKind};
 use std::path::{Path, PathBuf};
 
-/// Preset 1 of `machines/probing.pr`, machine coordinates.
-const ORIGIN: [f64; 3] = [100.0, 50.0, -60.0];
-/// Where the part really lies off its nominal place.
-const OFF: [f64; 3] = [3.2, -1.7, -0.25];
-/// Its turn about Z, degrees.
-const TURN: f64 = 1.5;
 /// The stylus ball's radius (`[probe] radius`).
 const BALL: f64 = 2.0;
 /// Lengths within 1 µm, angles within 0.001°.
@@ -27,17 +22,6 @@ fn machine_path() -> PathBuf {
 
 fn machine() -> MachineConfig {
     MachineConfig::load(&machine_path()).expect("feature machine loads")
-}
-
-fn turn(v: [f64; 2], deg: f64) -> [f64; 2] {
-    let (s, c) = deg.to_radians().sin_cos();
-    [v[0] * c - v[1] * s, v[0] * s + v[1] * c]
-}
-
-/// Program coordinates (preset 1, no basic rotation) of part point `q`.
-fn program_of(q: [f64; 2]) -> [f64; 2] {
-    let t = turn(q, TURN);
-    [OFF[0] + t[0], OFF[1] + t[1]]
 }
 
 /// The coordinate a probing move reports (ball centre at the trigger plus the ball radius
@@ -81,48 +65,13 @@ fn run_body(name: &str, body: &str) -> Interpreter {
     it
 }
 
-fn close(what: &str, got: f64, want: f64, tol: f64) {
-    eprintln!("{what}: off by {:e}", (got - want).abs());
-    assert!(
-        (got - want).abs() <= tol,
-        "{what}: got {got}, expected {want} (±{tol})"
-    );
-}
-
-/// Preset row 1: X, Y, Z and ROT.
-fn preset1(it: &Interpreter) -> ([f64; 3], f64) {
-    let (table, active) = it.presets();
-    assert_eq!(active, Some(1));
-    let t = table.expect("preset table");
-    let row = t.row(1).expect("row 1");
-    (
-        [
-            row[0].unwrap_or(0.0),
-            row[1].unwrap_or(0.0),
-            row[2].unwrap_or(0.0),
-        ],
-        t.rot(1),
+/// Cycle 408 of the slot example, writing the slot's centre line as X+0.
+fn c408() -> String {
+    edited(
+        &example_cycle("probing/slot_ridge.h", 408),
+        &[("Q405=-60 ;", "Q405=+0 ;")],
     )
 }
-
-const C408: &str = "TCH PROBE 408 SLOT CENTER REF PT ~
-  Q321=-60 ;CENTER IN 1ST AXIS ~
-  Q322=+25 ;CENTER IN 2ND AXIS ~
-  Q311=+8 ;SLOT WIDTH ~
-  Q272=+1 ;MEASURING AXIS ~
-  Q261=-4 ;MEASURING HEIGHT ~
-  Q320=+0 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q301=+0 ;MOVE TO CLEARANCE ~
-  Q305=+0 ;NUMBER IN TABLE ~
-  Q405=+0 ;DATUM ~
-  Q303=+1 ;MEAS. VALUE TRANSFER ~
-  Q381=+1 ;PROBE IN TS AXIS ~
-  Q382=+40 ;1ST CO. FOR TS AXIS ~
-  Q383=-55 ;2ND CO. FOR TS AXIS ~
-  Q384=+0 ;3RD CO. FOR TS AXIS ~
-  Q333=+0 ;DATUM
-";
 
 /// The slot's walls at part X−66 and X−54 along program Y+25: (− wall, + wall) reported.
 fn slot_walls(y: f64) -> (f64, f64) {
@@ -135,7 +84,7 @@ fn slot_walls(y: f64) -> (f64, f64) {
 /// its nominal width leaves: with Q311=8 both touches start from the nominal centre.
 #[test]
 fn cycle_408_sets_the_slot_centre_and_the_top_as_datum() {
-    let it = run_body("probe408.h", C408);
+    let it = run_body("probe408.h", &c408());
     let (lo, hi) = slot_walls(25.0);
     close("Q166", it.q(166), hi - lo, MM);
     close("Q157", it.q(157), (hi + lo) / 2.0, MM);
@@ -215,24 +164,16 @@ fn cycle_414_finds_the_outside_corner_and_turns_the_preset() {
 
 #[test]
 fn cycle_415_finds_the_inside_corner_of_the_pocket() {
-    let body = "TCH PROBE 415 DATUM INSIDE CORNER ~
-  Q263=-25 ;1ST POINT 1ST AXIS ~
-  Q264=-15 ;1ST POINT 2ND AXIS ~
-  Q326=+10 ;SPACING IN 1ST AXIS ~
-  Q327=+8 ;SPACING IN 2ND AXIS ~
-  Q308=+3 ;CORNER ~
-  Q261=-5 ;MEASURING HEIGHT ~
-  Q320=+2 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q301=+0 ;MOVE TO CLEARANCE ~
-  Q304=+0 ;BASIC ROTATION ~
-  Q305=+0 ;NUMBER IN TABLE ~
-  Q331=+10 ;DATUM ~
-  Q332=+20 ;DATUM ~
-  Q303=+1 ;MEAS. VALUE TRANSFER ~
-  Q381=+0 ;PROBE IN TS AXIS
-";
-    let it = run_body("probe415.h", body);
+    // the example's inside corner, read as X+10 Y+20 in preset 1
+    let body = edited(
+        &example_cycle("probing/corners.h", 415),
+        &[
+            ("Q305=+2 ;", "Q305=+0 ;"),
+            ("Q331=+0 ;", "Q331=+10 ;"),
+            ("Q332=+0 ;", "Q332=+20 ;"),
+        ],
+    );
+    let it = run_body("probe415.h", &body);
     let c = program_of([-25.0, -15.0]);
     close("Q151", it.q(151), c[0], MM);
     close("Q152", it.q(152), c[1], MM);
@@ -243,28 +184,16 @@ fn cycle_415_finds_the_inside_corner_of_the_pocket() {
     close("preset ROT", rot, 0.0, 1e-12);
 }
 
-const HOLES: &str = "  Q273=+30 ;CENTER IN 1ST AXIS ~
-  Q274=-25 ;CENTER IN 2ND AXIS ~
-  Q262=+40 ;NOMINAL DIAMETER ~
-  Q291=+30 ;ANGLE OF 1ST HOLE ~
-  Q292=+150 ;ANGLE OF 2ND HOLE ~
-  Q293=+270 ;ANGLE OF 3RD HOLE ~
-  Q261=-5 ;MEASURING HEIGHT ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-";
-
 #[test]
 fn cycles_416_and_430_find_the_bolt_hole_circle() {
-    let body = format!(
-        "TCH PROBE 430 MEAS. BOLT HOLE CIRC ~
-{HOLES}  Q288=+40.1 ;MAX. LIMIT ~
-  Q289=+39.9 ;MIN. LIMIT ~
-  Q279=+0.5 ;TOLERANCE 1ST CENTER ~
-  Q280=+0.5 ;TOLERANCE 2ND CENTER ~
-  Q281=+0 ;MEASURING LOG ~
-  Q309=+0 ;PGM STOP TOLERANCE ~
-  Q330=+0 ;TOOL
-"
+    // the example's bolt-hole circle with centre tolerances of 0.5 mm and no stop
+    let body = edited(
+        &example_cycle("probing/hole_patterns.h", 430),
+        &[
+            ("Q279=+5 ;", "Q279=+0.5 ;"),
+            ("Q280=+5 ;", "Q280=+0.5 ;"),
+            ("Q309=+1 ;", "Q309=+0 ;"),
+        ],
     );
     let it = run_body("probe430.h", &body);
     let c = program_of([30.0, -25.0]);
@@ -278,15 +207,9 @@ fn cycles_416_and_430_find_the_bolt_hole_circle() {
     assert!((c[0] - 30.0).abs() > 0.5);
     assert_eq!((it.q(180), it.q(181), it.q(182)), (0.0, 0.0, 1.0));
 
-    let body = format!(
-        "TCH PROBE 416 DATUM CIRCLE CENTER ~
-{HOLES}  Q305=+0 ;NUMBER IN TABLE ~
-  Q331=+0 ;DATUM ~
-  Q332=+0 ;DATUM ~
-  Q303=+1 ;MEAS. VALUE TRANSFER ~
-  Q381=+0 ;PROBE IN TS AXIS ~
-  Q320=+0 ;SET-UP CLEARANCE
-"
+    let body = edited(
+        &example_cycle("probing/hole_patterns.h", 416),
+        &[("Q331=+30 ;", "Q331=+0 ;"), ("Q332=-25 ;", "Q332=+0 ;")],
     );
     let it = run_body("probe416.h", &body);
     close("Q153", it.q(153), 40.0, MM);
@@ -297,24 +220,12 @@ fn cycles_416_and_430_find_the_bolt_hole_circle() {
 
 #[test]
 fn cycle_418_sets_the_crossing_of_the_diagonals() {
-    let body = "TCH PROBE 418 DATUM FROM 4 HOLES ~
-  Q268=+20 ;1ST CENTER 1ST AXIS ~
-  Q269=+20 ;1ST CENTER 2ND AXIS ~
-  Q270=+60 ;2ND CENTER 1ST AXIS ~
-  Q271=+20 ;2ND CENTER 2ND AXIS ~
-  Q316=+60 ;3RD CENTER 1ST AXIS ~
-  Q317=+50 ;3RD CENTER 2ND AXIS ~
-  Q318=+20 ;4TH CENTER 1ST AXIS ~
-  Q319=+50 ;4TH CENTER 2ND AXIS ~
-  Q261=-5 ;MEASURING HEIGHT ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q305=+0 ;NUMBER IN TABLE ~
-  Q331=+0 ;DATUM ~
-  Q332=+0 ;DATUM ~
-  Q303=+1 ;MEAS. VALUE TRANSFER ~
-  Q381=+0 ;PROBE IN TS AXIS
-";
-    let it = run_body("probe418.h", body);
+    // the example's four holes, written to the active preset
+    let body = edited(
+        &example_cycle("probing/hole_patterns.h", 418),
+        &[("Q305=+2 ;", "Q305=+0 ;")],
+    );
+    let it = run_body("probe418.h", &body);
     let c = program_of([40.0, 35.0]);
     close("Q151", it.q(151), c[0], MM);
     close("Q152", it.q(152), c[1], MM);
@@ -325,50 +236,25 @@ fn cycle_418_sets_the_crossing_of_the_diagonals() {
 
 #[test]
 fn cycle_402_turns_the_preset_by_the_line_through_two_studs() {
-    let body = "TCH PROBE 402 ROT OF 2 STUDS ~
-  Q268=+0 ;1ST CENTER 1ST AXIS ~
-  Q269=+15 ;1ST CENTER 2ND AXIS ~
-  Q313=+12 ;DIAMETER OF STUD 1 ~
-  Q261=+5 ;MEASURING HEIGHT 1 ~
-  Q270=+0 ;2ND CENTER 1ST AXIS ~
-  Q271=+48 ;2ND CENTER 2ND AXIS ~
-  Q314=+12 ;DIAMETER OF STUD 2 ~
-  Q315=+5 ;MEASURING HEIGHT 2 ~
-  Q320=+5 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q301=+0 ;MOVE TO CLEARANCE ~
-  Q307=+90 ;PRESET ROTATION ANG. ~
-  Q305=+0 ;NUMBER IN TABLE ~
-  Q402=+0 ;COMPENSATION ~
-  Q337=+0 ;SET TO ZERO
-";
-    let it = run_body("probe402.h", body);
+    let body = example_cycle("probing/studs.h", 402);
+    let it = run_body("probe402.h", &body);
     close("Q150", it.q(150), 90.0 + TURN, DEG);
     let (xyz, rot) = preset1(&it);
     close("preset ROT", rot, TURN, DEG);
     close("preset X", xyz[0], ORIGIN[0], 1e-12);
 }
 
-const C425: &str = "TCH PROBE 425 MEASURE INSIDE WIDTH ~
-  Q328=-60 ;STARTNG PNT 1ST AXIS ~
-  Q329=+25 ;STARTNG PNT 2ND AXIS ~
-  Q310=+0 ;OFFS. 2ND MEASUREMNT ~
-  Q272=+1 ;MEASURING AXIS ~
-  Q261=-4 ;MEASURING HEIGHT ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q311=+12 ;NOMINAL LENGTH ~
-  Q288=+12.05 ;MAXIMUM DIMENSION ~
-  Q289=+11.95 ;MINIMUM DIMENSION ~
-  Q281=+1 ;MEASURING LOG ~
-  Q309=+1 ;PGM STOP TOLERANCE ~
-  Q330=+0 ;TOOL ~
-  Q320=+0 ;SET-UP CLEARANCE ~
-  Q301=+1 ;MOVE TO CLEARANCE
-";
+/// Cycle 425 of the slot example, writing its measuring log.
+fn c425() -> String {
+    edited(
+        &example_cycle("probing/slot_ridge.h", 425),
+        &[("Q281=+0 ;", "Q281=+1 ;")],
+    )
+}
 
 #[test]
 fn cycles_425_and_426_measure_slot_and_ridge_widths() {
-    let it = run_body("probe425.h", C425);
+    let it = run_body("probe425.h", &c425());
     // both touches on Y+25: +X first, then −X
     let (lo, hi) = slot_walls(25.0);
     close("Q156", it.q(156), hi - lo, MM);
@@ -377,7 +263,7 @@ fn cycles_425_and_426_measure_slot_and_ridge_widths() {
     assert_eq!((it.q(180), it.q(181), it.q(182)), (1.0, 0.0, 0.0));
     // Q310=+5: the second touch on Y+30; across the turned slot the width grows by
     // 5·tan 1.5°, past the limit: scrap, and with Q309=0 no stop
-    let body = C425
+    let body = c425()
         .replace("Q310=+0", "Q310=+5")
         .replace("Q309=+1", "Q309=+0");
     let it = run_body("probe425_offset.h", &body);
@@ -388,23 +274,8 @@ fn cycles_425_and_426_measure_slot_and_ridge_widths() {
     assert!(hi - lo > 12.05);
     assert_eq!((it.q(180), it.q(181), it.q(182)), (0.0, 0.0, 1.0));
 
-    let body = "TCH PROBE 426 MEASURE RIDGE WIDTH ~
-  Q263=-30 ;1ST POINT 1ST AXIS ~
-  Q264=+25 ;1ST POINT 2ND AXIS ~
-  Q265=-40 ;2ND POINT 1ST AXIS ~
-  Q266=+25 ;2ND POINT 2ND AXIS ~
-  Q272=+1 ;MEASURING AXIS ~
-  Q261=+4 ;MEASURING HEIGHT ~
-  Q320=+2 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q311=+10 ;NOMINAL LENGTH ~
-  Q288=+10.1 ;MAXIMUM DIMENSION ~
-  Q289=+9.9 ;MINIMUM DIMENSION ~
-  Q281=+0 ;MEASURING LOG ~
-  Q309=+1 ;PGM STOP TOLERANCE ~
-  Q330=+0 ;TOOL
-";
-    let it = run_body("probe426.h", body);
+    let body = example_cycle("probing/slot_ridge.h", 426);
+    let it = run_body("probe426.h", &body);
     let hi = reported(0, -1.0, 25.0, [-30.0, 0.0], [1.0, 0.0]);
     let lo = reported(0, 1.0, 25.0, [-40.0, 0.0], [-1.0, 0.0]);
     close("Q156", it.q(156), hi - lo, MM);
@@ -414,7 +285,7 @@ fn cycles_425_and_426_measure_slot_and_ridge_widths() {
 
 #[test]
 fn a_width_out_of_tolerance_stops_the_program_and_logs_the_measurement() {
-    let body = C425
+    let body = c425()
         .replace("Q288=+12.05", "Q288=+11.99")
         .replace("Q289=+11.95", "Q289=+11.9");
     let (text, path) = program("probe425_tol.h", &format!("{body}L X+0 Y+0 Z+30 FMAX\n"));
@@ -465,7 +336,7 @@ fn a_width_out_of_tolerance_stops_the_program_and_logs_the_measurement() {
 
 #[test]
 fn q303_0_writes_the_slot_centre_into_the_datum_table() {
-    let body = C408
+    let body = c408()
         .replace("Q303=+1", "Q303=+0")
         .replace("Q305=+0", "Q305=+1")
         .replace("Q381=+1", "Q381=+0");
@@ -543,7 +414,7 @@ fn bad_cycle_parameters_are_refused_at_their_block_before_any_move() {
     );
     refused_at(
         "probe408_axis.h",
-        &C408.replace("Q272=+1", "Q272=+3"),
+        &c408().replace("Q272=+1", "Q272=+3"),
         6,
         "Q272=3: the measuring axis is 1 or 2",
     );
@@ -555,14 +426,14 @@ fn bad_cycle_parameters_are_refused_at_their_block_before_any_move() {
     );
     refused_at(
         "probe425_limits.h",
-        &C425.replace("Q289=+11.95", "Q289=+12.5"),
+        &c425().replace("Q289=+11.95", "Q289=+12.5"),
         6,
         "the smallest size 12.5 lies above the largest 12.05",
     );
     // Q303=0 on a machine without a datum table
     let (_, path) = program(
         "probe408_nodatum.h",
-        &C408
+        &c408()
             .replace("Q303=+1", "Q303=+0")
             .replace("Q305=+0", "Q305=+2"),
     );

@@ -121,18 +121,7 @@ fn a_rectangle_with_rl_is_offset_inside_the_tilted_plane() {
     // By hand, in the tilted system: the tool arrives on the normal of the first element
     // (20, 5), runs the inside offset rectangle (5, 5)–(35, 15) with its corners at the
     // intersections, leaves on the last element's normal and goes to (20, 10) with R0.
-    let expect = [
-        [20.0, 10.0, 5.0],
-        [20.0, 10.0, -2.0],
-        [20.0, 5.0, -2.0],
-        [35.0, 5.0, -2.0],
-        [35.0, 15.0, -2.0],
-        [5.0, 15.0, -2.0],
-        [5.0, 5.0, -2.0],
-        [20.0, 5.0, -2.0],
-        [20.0, 10.0, -2.0],
-        [20.0, 10.0, 5.0],
-    ];
+    let expect = common::mill5::RECT_RL_CENTRE;
     assert_eq!(got.len(), expect.len(), "{got:?}");
     // The tilted plane at depth −2: n · p = −2 with n = Rx(30)·(0, 0, 1) = (0, −½, √3/2).
     let n = common::mill5::rx(30.0, [0.0, 0.0, 1.0]);

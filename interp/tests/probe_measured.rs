@@ -3,6 +3,8 @@
 //! answers here come from a bore placed where no model puts it; the cycle's results must be
 //! that bore's, worked out in closed form.
 
+mod common;
+
 use klar_interp::{
     Blank, Interpreter, Op, OpKind, Pose, Probe, ProbeAnswer, ProbeData, ProbeRequest,
 };
@@ -56,32 +58,28 @@ fn bore_answer(r: &ProbeRequest) -> ProbeAnswer {
     }
 }
 
-const PROGRAM: &str = "BEGIN PGM M MM
-L X-25 Y-10 Z+20 R0 FMAX
-TCH PROBE 412 PRESET INSIDE CIRCLE ~
-  Q321=-25 ;CENTER IN 1ST AXIS ~
-  Q322=-10 ;CENTER IN 2ND AXIS ~
-  Q262=+24 ;NOMINAL DIAMETER ~
-  Q325=+0 ;STARTING ANGLE ~
-  Q247=+90 ;STEPPING ANGLE ~
-  Q261=-10 ;MEASURING HEIGHT ~
-  Q320=+5 ;SET-UP CLEARANCE ~
-  Q260=+20 ;CLEARANCE HEIGHT ~
-  Q301=+0 ;MOVE TO CLEARANCE ~
-  Q305=+0 ;NUMBER IN TABLE ~
-  Q331=+0 ;DATUM ~
-  Q332=+0 ;DATUM ~
-  Q303=+1 ;MEAS. VALUE TRANSFER ~
-  Q381=+0 ;PROBE IN TS AXIS ~
-  Q382=+0 ;1ST CO. FOR TS AXIS ~
-  Q383=+0 ;2ND CO. FOR TS AXIS ~
-  Q384=+0 ;3RD CO. FOR TS AXIS ~
-  Q333=+0 ;DATUM ~
-  Q423=+4 ;NO. OF PROBE POINTS ~
-  Q365=+1 ;TYPE OF TRAVERSE
-L X+0 Y+0 Z+50 FMAX
-END PGM M MM
-";
+/// Cycle 412 of `programs/probing_412.h` without its touch on the tool axis, in a program
+/// of its own: the cycle's block on line 3, a move over the new datum after it.
+fn program() -> String {
+    let text = common::lathe::program_file("probing_412.h");
+    let mut block = String::new();
+    for line in text.lines().skip_while(|l| !l.starts_with("TCH PROBE 412")) {
+        block += line;
+        block += "\n";
+        if !line.ends_with('~') {
+            break;
+        }
+    }
+    for (from, to) in [
+        ("Q381=+1 ;", "Q381=+0 ;"),
+        ("Q382=+30 ;", "Q382=+0 ;"),
+        ("Q383=+25 ;", "Q383=+0 ;"),
+    ] {
+        assert!(block.contains(from), "{from} in {block}");
+        block = block.replacen(from, to, 1);
+    }
+    format!("BEGIN PGM M MM\nL X-25 Y-10 Z+20 R0 FMAX\n{block}L X+0 Y+0 Z+50 FMAX\nEND PGM M MM\n")
+}
 
 fn start() -> Pose {
     let mut p = Pose::default();
@@ -146,7 +144,7 @@ fn cycle_412_takes_the_measured_touch_points_not_the_model() {
         asked,
         interp,
         error,
-    } = run(PROGRAM, bore_answer);
+    } = run(&program(), bore_answer);
     assert_eq!(error, None);
     assert_eq!(asked.len(), 4, "four touch points, one wait each");
     // least squares through four points on one circle: that circle exactly
@@ -213,7 +211,7 @@ fn a_probing_move_without_a_trigger_ends_in_touch_point_inaccessible() {
     let mut n = 0;
     let Outcome {
         ops, asked, error, ..
-    } = run(PROGRAM, |r| {
+    } = run(&program(), |r| {
         n += 1;
         if n == 2 {
             // nothing found: the axes ran the whole probing distance and stand at its end

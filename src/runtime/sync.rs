@@ -100,10 +100,7 @@ impl SyncProfile {
         rpm: f64,
         config: &MachineConfig,
     ) -> Result<SyncProfile, String> {
-        let length = (0..9)
-            .map(|i| (to.0[i] - from.0[i]).powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let length = path_length(from, to);
         let measured = match lead {
             ThreadLead::Z => (to[AxisLetter::Z] - from[AxisLetter::Z]).abs(),
             ThreadLead::X => (to[AxisLetter::X] - from[AxisLetter::X]).abs(),
@@ -231,6 +228,27 @@ impl SyncProfile {
     }
 }
 
+/// The straight-line length of the path from `from` to `to` over all nine pose components.
+pub(super) fn path_length(from: Pose, to: Pose) -> f64 {
+    (0..9)
+        .map(|i| (to.0[i] - from.0[i]).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// What every move geared to the spindle starts from: its profile at the commanded speed
+/// and the spindle it follows.
+pub(super) struct GearedStart<P> {
+    /// The op's profile at the commanded spindle speed.
+    pub profile: P,
+    /// The spindle in words.
+    pub name: String,
+    /// The signed spindle speed commanded before the op, rpm.
+    pub commanded: f64,
+    /// The spindle's at-speed timeout, s.
+    pub timeout: f64,
+}
+
 /// A geared pass under way: one servo cycle of it per [`Run::step`].
 pub(super) struct SyncPass {
     profile: SyncProfile,
@@ -253,23 +271,19 @@ impl Run<'_, '_> {
     /// trigger angle; [`Run::sync_step`] then runs it cycle by cycle.
     pub(super) fn spindle_sync(&mut self, op: &Op) -> Result<(), RunError> {
         let loc = op.loc;
-        self.settle_all()?;
-        let Some(spindle) = self.io.spindle_mut() else {
-            return Err(self.diagnostic(loc, "a thread pass needs a spindle".into()));
-        };
-        let name = spindle.name().to_string();
-        let commanded = spindle.commanded();
-        let timeout = spindle.at_speed_timeout;
-        if spindle.feedback().position.is_none() {
-            return Err(self.diagnostic(
-                loc,
-                format!("the {name} measures no spindle angle: it cannot cut threads"),
-            ));
-        }
-        let profile = match SyncProfile::new(&op.kind, commanded, self.config) {
-            Some(Ok(p)) => p,
-            Some(Err(message)) => return Err(self.diagnostic(loc, message)),
-            None => return Ok(()),
+        let Some(GearedStart {
+            profile,
+            name,
+            commanded,
+            timeout,
+        }) = self.geared_start(
+            op,
+            "a thread pass needs a spindle",
+            "cut threads",
+            SyncProfile::new,
+        )?
+        else {
+            return Ok(());
         };
         let dir = commanded.signum();
         let period = self.config.servo_period;
@@ -364,6 +378,43 @@ impl Run<'_, '_> {
                 (dir * f.rpm * 6.0).max(0.0),
             )
         })
+    }
+
+    /// Checks what a move geared to the spindle needs before it starts: the axes at rest, a
+    /// spindle (`no_spindle` says what lacks one), a measured spindle angle (without one it
+    /// cannot `what`), and a profile `profile` accepts at the commanded speed. `None` when
+    /// `profile` does not take the op.
+    pub(super) fn geared_start<P>(
+        &mut self,
+        op: &Op,
+        no_spindle: &str,
+        what: &str,
+        profile: impl FnOnce(&OpKind, f64, &MachineConfig) -> Option<Result<P, String>>,
+    ) -> Result<Option<GearedStart<P>>, RunError> {
+        let loc = op.loc;
+        self.settle_all()?;
+        let Some(spindle) = self.io.spindle_mut() else {
+            return Err(self.diagnostic(loc, no_spindle.into()));
+        };
+        let name = spindle.name().to_string();
+        let commanded = spindle.commanded();
+        let timeout = spindle.at_speed_timeout;
+        if spindle.feedback().position.is_none() {
+            return Err(self.diagnostic(
+                loc,
+                format!("the {name} measures no spindle angle: it cannot {what}"),
+            ));
+        }
+        match profile(&op.kind, commanded, self.config) {
+            Some(Ok(profile)) => Ok(Some(GearedStart {
+                profile,
+                name,
+                commanded,
+                timeout,
+            })),
+            Some(Err(message)) => Err(self.diagnostic(loc, message)),
+            None => Ok(None),
+        }
     }
 
     /// One servo cycle commanding `pose` with the velocity feed-forward `velocity`; planner

@@ -25,6 +25,7 @@
 //! override and feed hold do not act inside a tap; a stop requested during it takes effect
 //! when it has ended.
 
+use super::sync::{GearedStart, path_length};
 use super::{Run, RunError};
 use crate::config::{MachineConfig, SpindleBackendConfig};
 use klar_interp::op::SpindleDir;
@@ -117,10 +118,7 @@ impl TapProfile {
         rpm: f64,
         config: &MachineConfig,
     ) -> Result<TapProfile, String> {
-        let length = (0..9)
-            .map(|i| (to.0[i] - from.0[i]).powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let length = path_length(from, to);
         if !(length > 1e-9 && length.is_finite() && pitch > 0.0 && pitch.is_finite()) {
             return Err("the rigid tap does not move along its pitch".into());
         }
@@ -286,23 +284,19 @@ impl Run<'_, '_> {
     /// then runs it cycle by cycle.
     pub(super) fn rigid_tap(&mut self, op: &Op) -> Result<(), RunError> {
         let loc = op.loc;
-        self.settle_all()?;
-        let Some(spindle) = self.io.spindle_mut() else {
-            return Err(self.diagnostic(loc, "rigid tapping needs a spindle".into()));
-        };
-        let name = spindle.name().to_string();
-        let before = spindle.commanded();
-        let timeout = spindle.at_speed_timeout;
-        if spindle.feedback().position.is_none() {
-            return Err(self.diagnostic(
-                loc,
-                format!("the {name} measures no spindle angle: it cannot tap rigidly"),
-            ));
-        }
-        let profile = match TapProfile::new(&op.kind, before, self.config) {
-            Some(Ok(p)) => p,
-            Some(Err(message)) => return Err(self.diagnostic(loc, message)),
-            None => return Ok(()),
+        let Some(GearedStart {
+            profile,
+            commanded: before,
+            timeout,
+            ..
+        }) = self.geared_start(
+            op,
+            "rigid tapping needs a spindle",
+            "tap rigidly",
+            TapProfile::new,
+        )?
+        else {
+            return Ok(());
         };
         let OpKind::RigidTap { strokes, .. } = &op.kind else {
             return Ok(());

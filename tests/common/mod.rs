@@ -68,6 +68,26 @@ pub fn commanded(trace: &Trace, letters: &[&str]) -> Vec<Vec<f64>> {
         .collect()
 }
 
+/// The largest |Δx − `per_rev`·Δangle/360| (mm) over the stretches of one measured spindle
+/// revolution among `rows` (sample indices, increasing, at least one): from each row to the
+/// first row at least 360° of `angle` (degrees) further on, while there is one. `per_rev` is
+/// the signed travel of `x` per revolution.
+pub fn per_revolution_error(rows: &[usize], x: &[f64], angle: &[f64], per_rev: f64) -> f64 {
+    let mut worst: f64 = 0.0;
+    let mut j = rows[0];
+    let last = *rows.last().unwrap_or(&0);
+    for &i in rows {
+        while j <= last && angle[j] - angle[i] < 360.0 {
+            j += 1;
+        }
+        if j > last {
+            break;
+        }
+        worst = worst.max(((x[j] - x[i]) - per_rev * (angle[j] - angle[i]) / 360.0).abs());
+    }
+    worst
+}
+
 /// Largest |n-th finite difference| / dt^n of a sampled signal.
 pub fn max_derivative(x: &[f64], dt: f64, order: u32) -> f64 {
     let mut d = x.to_vec();

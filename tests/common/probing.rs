@@ -1,6 +1,6 @@
 //! Shared by the touch-probe tests: the probing machines of `machines/`, where their part
-//! really lies, the program text around the cycles, and the comparison of a result with its
-//! closed form.
+//! really lies, the program text around the cycles, the cycles of the example programs, and
+//! the comparison of a result with its closed form.
 
 use klar::config::MachineConfig;
 use klar_interp::{Interpreter, Op};
@@ -26,6 +26,75 @@ pub fn turn(v: [f64; 2], deg: f64) -> [f64; 2] {
     let (s, c) = deg.to_radians().sin_cos();
     [v[0] * c - v[1] * s, v[0] * s + v[1] * c]
 }
+
+/// Program coordinates (preset 1, no basic rotation) of part point `q`.
+pub fn program_of(q: [f64; 2]) -> [f64; 2] {
+    let t = turn(q, TURN);
+    [OFF[0] + t[0], OFF[1] + t[1]]
+}
+
+/// Preset row 1 after the run: X, Y, Z and ROT.
+pub fn preset1(it: &Interpreter) -> ([f64; 3], f64) {
+    let (table, active) = it.presets();
+    assert_eq!(active, Some(1));
+    let t = table.expect("preset table");
+    let row = t.row(1).expect("row 1");
+    (
+        [
+            row[0].unwrap_or(0.0),
+            row[1].unwrap_or(0.0),
+            row[2].unwrap_or(0.0),
+        ],
+        t.rot(1),
+    )
+}
+
+/// The block of `TCH PROBE <cycle>` (its first line and the lines it continues onto with
+/// `~`) as the example program `programs/<file>` writes it, each line ended by a newline.
+pub fn example_cycle(file: &str, cycle: u32) -> String {
+    let path = super::program(file);
+    let text = std::fs::read_to_string(&path).expect("example program");
+    let head = format!("TCH PROBE {cycle} ");
+    let mut lines = text.lines().skip_while(|l| !l.starts_with(&head));
+    let mut block = String::new();
+    for line in lines.by_ref() {
+        block.push_str(line);
+        block.push('\n');
+        if !line.ends_with('~') {
+            break;
+        }
+    }
+    assert!(!block.is_empty(), "{file} has no TCH PROBE {cycle}");
+    block
+}
+
+/// `block` with each `(from, to)` replaced, every `from` standing in it exactly once.
+pub fn edited(block: &str, edits: &[(&str, &str)]) -> String {
+    let mut out = block.to_string();
+    for (from, to) in edits {
+        assert_eq!(out.matches(from).count(), 1, "{from} once in {block}");
+        out = out.replacen(from, to, 1);
+    }
+    out
+}
+
+/// Cycle 410 in the pocket of the probing mill's part (centre X+20 Y−10, 36 × 28),
+/// writing the active preset.
+pub const C410: &str = "TCH PROBE 410 PRESET INSIDE RECTAN. ~
+  Q321=+20 ;CENTER IN 1ST AXIS ~
+  Q322=-10 ;CENTER IN 2ND AXIS ~
+  Q323=+36 ;FIRST SIDE LENGTH ~
+  Q324=+28 ;2ND SIDE LENGTH ~
+  Q261=-10 ;MEASURING HEIGHT ~
+  Q320=+5 ;SET-UP CLEARANCE ~
+  Q260=+20 ;CLEARANCE HEIGHT ~
+  Q301=+0 ;MOVE TO CLEARANCE ~
+  Q305=+0 ;NUMBER IN TABLE ~
+  Q331=+0 ;DATUM ~
+  Q332=+0 ;DATUM ~
+  Q303=+1 ;MEAS. VALUE TRANSFER ~
+  Q381=+0 ;PROBE IN TS AXIS
+";
 
 /// `got` within `tol` of `want`; prints how far off it is.
 pub fn close(what: &str, got: f64, want: f64, tol: f64) {

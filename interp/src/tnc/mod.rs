@@ -19,6 +19,7 @@ pub(crate) mod fk_solve;
 pub(crate) mod fk_words;
 pub(crate) mod geom;
 pub(crate) mod mfunc;
+pub(crate) mod op_points;
 pub(crate) mod paths;
 pub(crate) mod plane;
 pub(crate) mod plane_math;

@@ -22,9 +22,10 @@
 use std::collections::VecDeque;
 
 use super::exec::{ExecError, Machine, here};
+use super::op_points::map_points;
 use super::plane_math::{self as pm, M3};
 use crate::diag::ProgramError;
-use crate::op::{AxisLetter, CompSide, Op, OpKind, Pose, SplineAxis};
+use crate::op::{AxisLetter, CompSide, Op, OpKind, Pose};
 
 /// Largest distance (mm) between a tilted arc and the lines that replace it.
 pub const ARC_CHORD_TOLERANCE: f64 = 0.001;
@@ -46,55 +47,10 @@ pub(super) fn turn(r: &M3, p: &Pose) -> Pose {
 /// have their points turned but keep their plane: they are meant to be resolved (by the
 /// radius compensation) before the tilt.
 pub(crate) fn tilt_kind(r: &M3, kind: &OpKind) -> Vec<OpKind> {
+    if let Some(mapped) = map_points(kind, |p| turn(r, p), |v| pm::apply(r, v)) {
+        return vec![mapped];
+    }
     match kind {
-        OpKind::Spline {
-            from,
-            to,
-            axes,
-            feed,
-        } => vec![OpKind::Spline {
-            from: turn(r, from),
-            to: turn(r, to),
-            axes: turn_spline(r, axes),
-            feed: *feed,
-        }],
-        OpKind::Approach {
-            from,
-            to,
-            shape,
-            side,
-            feed_to_aux,
-            feed,
-            plane,
-            with_tool_axis,
-        } => vec![OpKind::Approach {
-            from: turn(r, from),
-            to: turn(r, to),
-            shape: *shape,
-            side: *side,
-            feed_to_aux: *feed_to_aux,
-            feed: *feed,
-            plane: *plane,
-            with_tool_axis: *with_tool_axis,
-        }],
-        OpKind::Depart {
-            from,
-            to,
-            shape,
-            feed,
-            plane,
-        } => vec![OpKind::Depart {
-            from: turn(r, from),
-            to: to.as_ref().map(|p| turn(r, p)),
-            shape: *shape,
-            feed: *feed,
-            plane: *plane,
-        }],
-        OpKind::Line { from, to, feed } => vec![OpKind::Line {
-            from: turn(r, from),
-            to: turn(r, to),
-            feed: *feed,
-        }],
         OpKind::Arc {
             from,
             to,
@@ -130,38 +86,6 @@ pub(crate) fn tilt_kind(r: &M3, kind: &OpKind) -> Vec<OpKind> {
         }],
         other => vec![other.clone()],
     }
-}
-
-/// Spline coefficients turned by `r`: the X, Y, Z coefficients of each power of t form a
-/// vector that turns like a point (the other axes keep theirs). An axis of X, Y, Z appears
-/// in the result when it had coefficients or gets non-zero ones.
-fn turn_spline(r: &M3, axes: &[SplineAxis]) -> Vec<SplineAxis> {
-    let mut k = [[0.0; 3]; 3]; // k[power][X/Y/Z]
-    let mut present = [false; 3];
-    let mut out = Vec::with_capacity(axes.len() + 2);
-    for ax in axes {
-        let i = ax.axis.index();
-        if i < 3 {
-            present[i] = true;
-            for (row, value) in k.iter_mut().zip(ax.k) {
-                row[i] = value;
-            }
-        } else {
-            out.push(*ax);
-        }
-    }
-    let turned = k.map(|row| pm::apply(r, row));
-    for (i, letter) in [AxisLetter::X, AxisLetter::Y, AxisLetter::Z]
-        .into_iter()
-        .enumerate()
-    {
-        let c = [turned[0][i], turned[1][i], turned[2][i]];
-        if present[i] || c.iter().any(|v| *v != 0.0) {
-            out.push(SplineAxis { axis: letter, k: c });
-        }
-    }
-    out.sort_by_key(|a| a.axis);
-    out
 }
 
 /// Points along an arc op, start and end included, chords within the tolerance.

@@ -538,19 +538,7 @@ impl Machine {
         run: Run,
         out: &mut VecDeque<Op>,
     ) -> Result<(), ExecError> {
-        let new: P3 = [
-            self.opt(def, 331, 0.0),
-            self.opt(def, 332, 0.0),
-            self.opt(def, 333, 0.0),
-        ];
-        let w = self.probe.axis_hit.take();
-        self.set_datum(
-            def,
-            [Some(centre[0]), Some(centre[1]), w],
-            new,
-            out,
-            run.loc,
-        )
+        self.point_datum(def, centre, None, out, run.loc)
     }
 
     /// 427: one coordinate (see [`Self::one_coordinate`]); Q160 the coordinate measured.

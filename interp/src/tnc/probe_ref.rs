@@ -105,6 +105,26 @@ impl Machine {
         }
     }
 
+    /// Writes the datum of a preset cycle that found the working-plane point `point`: it
+    /// shall read Q331/Q332 afterwards, and the tool-axis touch (Q381=1), when there was one,
+    /// Q333; with the basic rotation `rot` when given.
+    pub(super) fn point_datum(
+        &mut self,
+        def: &CycleDef,
+        point: [f64; 2],
+        rot: Option<f64>,
+        out: &mut VecDeque<Op>,
+        loc: SourceLoc,
+    ) -> Result<(), ExecError> {
+        let w = self.probe.axis_hit.take();
+        let new = [
+            self.opt(def, 331, 0.0),
+            self.opt(def, 332, 0.0),
+            self.opt(def, 333, 0.0),
+        ];
+        self.put_datum(def, [Some(point[0]), Some(point[1]), w], new, rot, out, loc)
+    }
+
     /// Writes the datum found by a preset cycle: the program point `measured` (working-plane
     /// axes; `None` for axes not measured) shall read `new` afterwards, with the basic rotation
     /// `rot` when given (see the module doc for Q303/Q305).
@@ -298,20 +318,7 @@ impl Machine {
             1.0 => Some(self.cyc.xf.basic_rot + angle),
             v => return Err(bad(def.number, format!("Q304={v}: 0 or 1"))),
         };
-        let w = self.probe.axis_hit.take();
-        let new = [
-            self.opt(def, 331, 0.0),
-            self.opt(def, 332, 0.0),
-            self.opt(def, 333, 0.0),
-        ];
-        self.put_datum(
-            def,
-            [Some(corner[0]), Some(corner[1]), w],
-            new,
-            rot,
-            out,
-            run.loc,
-        )
+        self.point_datum(def, corner, rot, out, run.loc)
     }
 
     /// 414: preset in an outside corner.
@@ -424,20 +431,7 @@ impl Machine {
         if !datum {
             return self.report430(def, centre, dia, run);
         }
-        let w = self.probe.axis_hit.take();
-        let new = [
-            self.opt(def, 331, 0.0),
-            self.opt(def, 332, 0.0),
-            self.opt(def, 333, 0.0),
-        ];
-        self.put_datum(
-            def,
-            [Some(centre[0]), Some(centre[1]), w],
-            new,
-            None,
-            out,
-            run.loc,
-        )
+        self.point_datum(def, centre, None, out, run.loc)
     }
 
     /// 418: preset in the crossing of the diagonals of four holes.
@@ -475,13 +469,7 @@ impl Machine {
         })?;
         self.set_q(151, x[0] / self.unit);
         self.set_q(152, x[1] / self.unit);
-        let w = self.probe.axis_hit.take();
-        let new = [
-            self.opt(def, 331, 0.0),
-            self.opt(def, 332, 0.0),
-            self.opt(def, 333, 0.0),
-        ];
-        self.put_datum(def, [Some(x[0]), Some(x[1]), w], new, None, out, run.loc)
+        self.point_datum(def, x, None, out, run.loc)
     }
 
     /// The centre of a stud of diameter `d` about nominal `c`, probed from outside at four

@@ -27,7 +27,8 @@
 //!   APPR/DEP side swaps likewise and their lengths and radii scale with the plane factor;
 //! - spline coefficients are direction vectors: they take the linear part only.
 
-use crate::op::{ApproachShape, CompSide, OpKind, Plane, Pose, SplineAxis};
+use super::op_points::map_points;
+use crate::op::{ApproachShape, CompSide, OpKind, Plane, Pose};
 
 /// Tolerance for "same scaling factor" on the two axes of an arc's plane.
 const SAME_FACTOR: f64 = 1e-12;
@@ -225,11 +226,7 @@ impl Transform {
     /// arc outside the rotation plane while a rotation is active.
     pub fn map_op(&self, kind: &OpKind) -> Result<OpKind, String> {
         Ok(match kind {
-            OpKind::Line { from, to, feed } => OpKind::Line {
-                from: self.map_point(from),
-                to: self.map_point(to),
-                feed: *feed,
-            },
+            OpKind::Line { .. } | OpKind::Spline { .. } => self.map_points(kind),
             OpKind::Arc {
                 from,
                 to,
@@ -264,58 +261,24 @@ impl Transform {
                     feed: *feed,
                 }
             }
-            OpKind::Spline {
-                from,
-                to,
-                axes,
-                feed,
-            } => OpKind::Spline {
-                from: self.map_point(from),
-                to: self.map_point(to),
-                axes: self.map_spline(axes),
-                feed: *feed,
-            },
-            OpKind::Approach {
-                from,
-                to,
-                shape,
-                side,
-                feed_to_aux,
-                feed,
-                plane,
-                with_tool_axis,
-            } => {
+            OpKind::Approach { plane, .. } => {
                 let f = self.plane_factor(*plane, "an APPR path")?;
-                OpKind::Approach {
-                    from: self.map_point(from),
-                    to: self.map_point(to),
-                    shape: self.map_shape(*shape, f),
-                    side: if self.flips(*plane) {
-                        Self::swap(*side)
-                    } else {
-                        *side
-                    },
-                    feed_to_aux: *feed_to_aux,
-                    feed: *feed,
-                    plane: *plane,
-                    with_tool_axis: *with_tool_axis,
+                let mut out = self.map_points(kind);
+                if let OpKind::Approach { shape, side, .. } = &mut out {
+                    *shape = self.map_shape(*shape, f);
+                    if self.flips(*plane) {
+                        *side = Self::swap(*side);
+                    }
                 }
+                out
             }
-            OpKind::Depart {
-                from,
-                to,
-                shape,
-                feed,
-                plane,
-            } => {
+            OpKind::Depart { plane, .. } => {
                 let f = self.plane_factor(*plane, "a DEP path")?;
-                OpKind::Depart {
-                    from: self.map_point(from),
-                    to: to.as_ref().map(|p| self.map_point(p)),
-                    shape: self.map_shape(*shape, f),
-                    feed: *feed,
-                    plane: *plane,
+                let mut out = self.map_points(kind);
+                if let OpKind::Depart { shape, .. } = &mut out {
+                    *shape = self.map_shape(*shape, f);
                 }
+                out
             }
             OpKind::RadiusComp { side } if self.flips(self.plane) => OpKind::RadiusComp {
                 side: Self::swap(*side),
@@ -324,46 +287,18 @@ impl Transform {
         })
     }
 
-    /// Spline coefficients through the linear part (X, Y, Z mix under rotation; the other
-    /// axes keep theirs).
-    fn map_spline(&self, axes: &[SplineAxis]) -> Vec<SplineAxis> {
-        let mut k = [[0.0; 3]; 3]; // k[order][axis X/Y/Z]
-        let mut present = [false; 3];
-        let mut out = Vec::with_capacity(axes.len() + 2);
-        for ax in axes {
-            let i = ax.axis.index();
-            if i < 3 {
-                present[i] = true;
-                for (o, row) in k.iter_mut().enumerate() {
-                    row[i] = ax.k[o];
-                }
-            } else {
-                out.push(*ax);
-            }
-        }
-        let mapped = k.map(|row| self.linear(row));
-        for (i, letter) in [
-            crate::op::AxisLetter::X,
-            crate::op::AxisLetter::Y,
-            crate::op::AxisLetter::Z,
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let c = [mapped[0][i], mapped[1][i], mapped[2][i]];
-            if present[i] || c.iter().any(|v| *v != 0.0) {
-                out.push(SplineAxis { axis: letter, k: c });
-            }
-        }
-        out.sort_by_key(|a| a.axis);
-        out
+    /// A line, spline or APPR/DEP op with its points mapped and a spline's coefficients
+    /// through the linear part (X, Y, Z mix under rotation; the other axes keep theirs);
+    /// any other op unchanged.
+    fn map_points(&self, kind: &OpKind) -> OpKind {
+        map_points(kind, |p| self.map_point(p), |v| self.linear(v)).unwrap_or_else(|| kind.clone())
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::op::{AxisLetter, Feed};
+    use crate::op::{AxisLetter, Feed, SplineAxis};
 
     const EPS: f64 = 1e-9;
 

@@ -26,9 +26,9 @@
 //! forth and back per infeed. The meaning of Q367 = 1…3 is this module's reading of the
 //! manual's "left/right slot circle".
 
-use super::super::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
+use super::super::{CycleContext, CycleError, CycleFeed, Move};
 use super::geom::{EPS, Frame, Path, Seg, check_size, steps_down};
-use super::params::{Params, modal_feed, pocket_ccw};
+use super::params::{Params, pocket_ccw};
 
 /// A point on the circle of radius `r` about `c` at angle `a` (radians).
 fn polar(c: [f64; 2], r: f64, a: f64) -> [f64; 2] {
@@ -133,37 +133,18 @@ pub(super) fn circular_slot(
     } else {
         p.choice(377, reps, 99_999, "1 to 99999")?
     };
-    let depth = p.q(201, "depth")?;
-    if depth > 0.0 {
-        return Err(p.range(ParamKey::Q(201), depth, "negative (0 skips the cycle)"));
-    }
-    let surface = p.q(203, "workpiece surface coordinate")?;
-    let infeed = p.q(202, "plunging depth")?;
-    p.check(202, infeed, EPS, f64::MAX, "greater than 0")?;
-    let finish_infeed = p.check(338, p.q_or(338, 0.0), 0.0, f64::MAX, "0 or more")?;
-    let clear = p.check(200, p.q_or(200, 2.0), 0.0, f64::MAX, "0 or more")?;
-    let clear2 = p
-        .check(204, p.q_or(204, 50.0), 0.0, f64::MAX, "0 or more")?
-        .max(clear);
+    let heights = p.heights()?;
     let floor = p.check(369, p.q_or(369, 0.0), 0.0, f64::MAX, "0 or more")?;
     let overlap = p.check(370, p.q_or(370, 1.0), 0.1, 1.9999, "0.1 to 1.9999")?;
     let ramp = p.choice(366, p.q_or(366, 1.0), 2, "0, 1 or 2")? != 0;
     let ccw = pocket_ccw(p.q_or(351, 1.0), ctx.spindle);
-    let f_mill = p.feed_or(207, modal_feed(ctx))?;
-    let f_plunge = p.feed_or(206, f_mill)?;
-    let f_finish = p.feed_or(385, f_mill)?;
-    if depth == 0.0 {
+    let feeds = p.feeds(ctx)?;
+    if heights.depth == 0.0 {
         return Ok(());
     }
-    let r = ctx.tool_radius;
+    let r = p.tool_radius(ctx)?;
     let w = width / 2.0;
     let rm = dia / 2.0;
-    if !(r.is_finite() && r > 0.0) {
-        return Err(CycleError::ToolRadius {
-            cycle: p.cycle,
-            radius: r,
-        });
-    }
     if w < r - EPS {
         return Err(p.geometry(format!(
             "the tool (diameter {}) is wider than the slot ({width})",
@@ -176,7 +157,7 @@ pub(super) fn circular_slot(
     if w >= rm {
         return Err(p.geometry("the slot is wider than its pitch circle diameter"));
     }
-    if op != 2 && -depth < floor {
+    if op != 2 && -heights.depth < floor {
         return Err(p.geometry("the floor allowance Q369 is larger than the depth"));
     }
     let (a_start, sweep) = (start.to_radians(), len.to_radians());
@@ -194,17 +175,27 @@ pub(super) fn circular_slot(
         _ => polar(tool, -rm, ref_angle),
     };
 
-    let rough_levels = steps_down(surface, surface + depth + floor, infeed).len();
-    let finish_levels = steps_down(surface, surface + depth, finish_infeed).len();
+    let rough_levels = steps_down(
+        heights.surface,
+        heights.surface + heights.depth + floor,
+        heights.infeed,
+    )
+    .len();
+    let finish_levels = steps_down(
+        heights.surface,
+        heights.surface + heights.depth,
+        heights.finish_infeed,
+    )
+    .len();
     let ring_count = (w / (overlap * 2.0 * r)).ceil() + 2.0;
     check_size(
         p.cycle,
         f64::from(reps) * 6.0 * ((rough_levels + 1) as f64 * ring_count + finish_levels as f64),
     )?;
     let mut path = Path::new(out, Frame::new([0.0, 0.0], 0.0), ctx.pos);
-    let top = surface + clear;
-    let safe = surface + clear2;
-    let bottom = surface + depth;
+    let top = heights.surface + heights.clear;
+    let safe = heights.surface + heights.clear2;
+    let bottom = heights.surface + heights.depth;
     if ctx.pos[2] < safe {
         path.line_abs([ctx.pos[0], ctx.pos[1], safe], CycleFeed::Rapid);
     }
@@ -245,29 +236,29 @@ pub(super) fn circular_slot(
         if op != 2 {
             let hs = rings(w - r - side);
             let mut from = top;
-            for z in steps_down(surface, bottom + floor, infeed) {
+            for z in steps_down(heights.surface, bottom + floor, heights.infeed) {
                 let delta = sweep.min(2.0 * r / rm);
                 if ramp && delta > 1e-6 {
                     let mid = polar(centre, rm, slot.a0 + delta);
-                    path.arc(centre, mid, (from + z) / 2.0, true, 0, f_plunge);
-                    path.arc(centre, e0, z, false, 0, f_plunge);
+                    path.arc(centre, mid, (from + z) / 2.0, true, 0, feeds.plunge);
+                    path.arc(centre, e0, z, false, 0, feeds.plunge);
                 } else {
-                    path.line(e0, z, f_plunge);
+                    path.line(e0, z, feeds.plunge);
                 }
-                emit_rings(&mut path, &hs, z, f_mill);
+                emit_rings(&mut path, &hs, z, feeds.mill);
                 from = z;
             }
         }
         if op != 1 {
             if side > 0.0 || op == 2 {
-                for z in steps_down(surface, bottom, finish_infeed) {
-                    path.line(e0, z, f_plunge);
-                    emit_rings(&mut path, &[w - r], z, f_finish);
+                for z in steps_down(heights.surface, bottom, heights.finish_infeed) {
+                    path.line(e0, z, feeds.plunge);
+                    emit_rings(&mut path, &[w - r], z, feeds.finish);
                 }
             }
             if floor > 0.0 {
-                path.line(e0, bottom, f_plunge);
-                emit_rings(&mut path, &rings(w - r), bottom, f_finish);
+                path.line(e0, bottom, feeds.plunge);
+                emit_rings(&mut path, &rings(w - r), bottom, feeds.finish);
             }
         }
         path.line(e0, top, CycleFeed::Rapid);

@@ -32,7 +32,7 @@
 
 use super::super::{CycleContext, CycleError, CycleFeed, Move};
 use super::geom::{EPS, Frame, Path, RoundedRect, check_size, steps_down};
-use super::params::{Params, modal_feed, pocket_ccw};
+use super::params::{Params, pocket_ccw};
 
 /// How the tool enters the material for roughing.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -97,22 +97,7 @@ fn common(
     stepover_max: f64,
 ) -> Result<Option<Pocket>, CycleError> {
     let op = p.choice(215, p.q_or(215, 0.0), 2, "0, 1 or 2")?;
-    let depth = p.q(201, "depth")?;
-    if depth > 0.0 {
-        return Err(p.range(
-            super::super::ParamKey::Q(201),
-            depth,
-            "negative (0 skips the cycle)",
-        ));
-    }
-    let surface = p.q(203, "workpiece surface coordinate")?;
-    let infeed = p.q(202, "plunging depth")?;
-    p.check(202, infeed, EPS, f64::MAX, "greater than 0")?;
-    let finish_infeed = p.check(338, p.q_or(338, 0.0), 0.0, f64::MAX, "0 or more")?;
-    let clear = p.check(200, p.q_or(200, 2.0), 0.0, f64::MAX, "0 or more")?;
-    let clear2 = p
-        .check(204, p.q_or(204, 50.0), 0.0, f64::MAX, "0 or more")?
-        .max(clear);
+    let h = p.heights()?;
     let side = p.check(368, p.q_or(368, 0.0), 0.0, f64::MAX, "0 or more")?;
     let floor = p.check(369, p.q_or(369, 0.0), 0.0, f64::MAX, "0 or more")?;
     let overlap = p.check(
@@ -129,19 +114,11 @@ fn common(
         1 => plunge_choices[1],
         _ => plunge_choices[2],
     };
-    let f_mill = p.feed_or(207, modal_feed(ctx))?;
-    let f_plunge = p.feed_or(206, f_mill)?;
-    let f_finish = p.feed_or(385, f_mill)?;
-    if depth == 0.0 {
+    let feeds = p.feeds(ctx)?;
+    if h.depth == 0.0 {
         return Ok(None);
     }
-    let r = ctx.tool_radius;
-    if !(r.is_finite() && r > 0.0) {
-        return Err(CycleError::ToolRadius {
-            cycle: p.cycle,
-            radius: r,
-        });
-    }
+    let r = p.tool_radius(ctx)?;
     if shape.half_min() < r - EPS {
         return Err(p.geometry(format!(
             "the tool (diameter {}) is larger than the pocket (width {})",
@@ -152,7 +129,7 @@ fn common(
     if op != 2 && shape.half_min() < r + side - EPS {
         return Err(p.geometry("the side allowance Q368 leaves no room for the tool"));
     }
-    if -depth < floor - EPS && op != 2 {
+    if -h.depth < floor - EPS && op != 2 {
         return Err(p.geometry("the floor allowance Q369 is larger than the depth"));
     }
     Ok(Some(Pocket {
@@ -160,20 +137,20 @@ fn common(
         shape,
         frame,
         op,
-        surface,
-        depth,
-        infeed,
-        finish_infeed,
-        clear,
-        clear2,
+        surface: h.surface,
+        depth: h.depth,
+        infeed: h.infeed,
+        finish_infeed: h.finish_infeed,
+        clear: h.clear,
+        clear2: h.clear2,
         side,
         floor,
         stepover: overlap * 2.0 * r,
         ccw: pocket_ccw(q351, ctx.spindle),
         plunge,
-        f_plunge,
-        f_mill,
-        f_finish,
+        f_plunge: feeds.plunge,
+        f_mill: feeds.mill,
+        f_finish: feeds.finish,
     }))
 }
 
@@ -193,21 +170,31 @@ pub(super) fn corner_offset(q367: u32, ha: f64, hb: f64) -> [f64; 2] {
 /// The pocket frame for a centre given relative to the tool position in a frame turned
 /// by `deg`.
 fn placed(ctx: &CycleContext, deg: f64, local_offset: [f64; 2]) -> Frame {
-    let turn = Frame::new([ctx.pos[0], ctx.pos[1]], deg);
-    Frame::new(turn.map(local_offset), deg)
+    Frame::new(placed_centre(ctx, deg, local_offset), deg)
 }
 
-/// Cycle 251 RECTANGULAR POCKET: sides Q218 × Q219, corner radius Q220, turned by Q224
-/// about the pocket centre, placed by Q367 (see [`corner_offset`]).
-pub(super) fn rect_pocket(
-    p: &Params,
-    ctx: &CycleContext,
-    out: &mut Vec<Move>,
-) -> Result<(), CycleError> {
+/// The centre that lies `local_offset` from the tool position in a frame turned by `deg`.
+fn placed_centre(ctx: &CycleContext, deg: f64, local_offset: [f64; 2]) -> [f64; 2] {
+    Frame::new([ctx.pos[0], ctx.pos[1]], deg).map(local_offset)
+}
+
+/// The side lengths Q218 and Q219 of a rectangle (251, 256), each greater than 0.
+pub(super) fn rect_sides(p: &Params) -> Result<(f64, f64), CycleError> {
     let l1 = p.q(218, "first side length")?;
     let l2 = p.q(219, "second side length")?;
     p.check(218, l1, EPS, f64::MAX, "greater than 0")?;
     p.check(219, l2, EPS, f64::MAX, "greater than 0")?;
+    Ok((l1, l2))
+}
+
+/// The outline of sides `l1` × `l2` with corner radius Q220 (251, 256), its turn Q224 in
+/// degrees, and its centre placed by Q367 (see [`corner_offset`]) from the tool position.
+pub(super) fn rect_outline(
+    p: &Params,
+    ctx: &CycleContext,
+    l1: f64,
+    l2: f64,
+) -> Result<(RoundedRect, f64, [f64; 2]), CycleError> {
     let rc = p.check(
         220,
         p.q_or(220, 0.0),
@@ -222,7 +209,20 @@ pub(super) fn rect_pocket(
         hb: l2 / 2.0,
         rc,
     };
-    let frame = placed(ctx, rot, corner_offset(pos, shape.ha, shape.hb));
+    let centre = placed_centre(ctx, rot, corner_offset(pos, shape.ha, shape.hb));
+    Ok((shape, rot, centre))
+}
+
+/// Cycle 251 RECTANGULAR POCKET: sides Q218 × Q219, corner radius Q220, turned by Q224
+/// about the pocket centre, placed by Q367 (see [`corner_offset`]).
+pub(super) fn rect_pocket(
+    p: &Params,
+    ctx: &CycleContext,
+    out: &mut Vec<Move>,
+) -> Result<(), CycleError> {
+    let (l1, l2) = rect_sides(p)?;
+    let (shape, rot, centre) = rect_outline(p, ctx, l1, l2)?;
+    let frame = Frame::new(centre, rot);
     let plunges = [Plunge::Vertical, Plunge::Helical, Plunge::Reciprocating];
     match common(p, ctx, shape, frame, plunges, 1.414)? {
         Some(pk) => run(&pk, ctx, out),

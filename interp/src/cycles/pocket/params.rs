@@ -1,7 +1,36 @@
 //! Reading and checking cycle parameters.
 
 use super::super::{CycleContext, CycleError, CycleFeed, ParamKey, ParamSource};
+use super::geom::EPS;
 use crate::op::SpindleDir;
+
+/// The heights and infeeds the milling cycles 251 to 257 share.
+#[derive(Debug, Clone, Copy)]
+pub(in crate::cycles) struct Heights {
+    /// Depth Q201 (0 or negative).
+    pub depth: f64,
+    /// Workpiece surface Q203.
+    pub surface: f64,
+    /// Plunging depth Q202.
+    pub infeed: f64,
+    /// Finishing infeed Q338 (0: all at once).
+    pub finish_infeed: f64,
+    /// Set-up clearance Q200.
+    pub clear: f64,
+    /// 2nd set-up clearance Q204, at least the set-up clearance.
+    pub clear2: f64,
+}
+
+/// The feeds the milling cycles 251 to 257 share, each given or taken from the milling feed.
+#[derive(Debug, Clone, Copy)]
+pub(in crate::cycles) struct Feeds {
+    /// Milling feed Q207 (the modal feed when missing).
+    pub mill: CycleFeed,
+    /// Plunging feed Q206.
+    pub plunge: CycleFeed,
+    /// Finishing feed Q385.
+    pub finish: CycleFeed,
+}
 
 /// Reads the parameters of one cycle definition and reports problems with the cycle number.
 pub(in crate::cycles) struct Params<'a> {
@@ -130,6 +159,56 @@ impl<'a> Params<'a> {
             Some(v) => self.feed_value(ParamKey::Q(n), v, false),
             None => Ok(default),
         }
+    }
+
+    /// Depth Q201 (a positive depth is refused), surface Q203, plunging depth Q202,
+    /// finishing infeed Q338, set-up clearance Q200 and 2nd set-up clearance Q204, read and
+    /// checked in that order.
+    pub fn heights(&self) -> Result<Heights, CycleError> {
+        let depth = self.q(201, "depth")?;
+        if depth > 0.0 {
+            return Err(self.range(ParamKey::Q(201), depth, "negative (0 skips the cycle)"));
+        }
+        let surface = self.q(203, "workpiece surface coordinate")?;
+        let infeed = self.q(202, "plunging depth")?;
+        self.check(202, infeed, EPS, f64::MAX, "greater than 0")?;
+        let finish_infeed = self.check(338, self.q_or(338, 0.0), 0.0, f64::MAX, "0 or more")?;
+        let clear = self.check(200, self.q_or(200, 2.0), 0.0, f64::MAX, "0 or more")?;
+        let clear2 = self
+            .check(204, self.q_or(204, 50.0), 0.0, f64::MAX, "0 or more")?
+            .max(clear);
+        Ok(Heights {
+            depth,
+            surface,
+            infeed,
+            finish_infeed,
+            clear,
+            clear2,
+        })
+    }
+
+    /// Milling feed Q207, plunging feed Q206 and finishing feed Q385, read in that order.
+    pub fn feeds(&self, ctx: &CycleContext) -> Result<Feeds, CycleError> {
+        let mill = self.feed_or(207, modal_feed(ctx))?;
+        let plunge = self.feed_or(206, mill)?;
+        let finish = self.feed_or(385, mill)?;
+        Ok(Feeds {
+            mill,
+            plunge,
+            finish,
+        })
+    }
+
+    /// The tool radius of `ctx`, refused unless finite and positive.
+    pub fn tool_radius(&self, ctx: &CycleContext) -> Result<f64, CycleError> {
+        let r = ctx.tool_radius;
+        if !(r.is_finite() && r > 0.0) {
+            return Err(CycleError::ToolRadius {
+                cycle: self.cycle,
+                radius: r,
+            });
+        }
+        Ok(r)
     }
 }
 

@@ -21,10 +21,10 @@
 //! Approximation: the tool enters each ring on a straight line from outside instead of a
 //! tangential approach.
 
-use super::super::{CycleContext, CycleError, CycleFeed, Move, ParamKey};
+use super::super::{CycleContext, CycleError, CycleFeed, Move};
 use super::geom::{EPS, Frame, Path, RoundedRect, check_size, steps_down};
-use super::milled::corner_offset;
-use super::params::{Params, modal_feed, pocket_ccw};
+use super::milled::{rect_outline, rect_sides};
+use super::params::{Params, pocket_ccw};
 
 /// A stud in its frame, with the blank around it.
 struct Stud {
@@ -41,10 +41,7 @@ pub(super) fn rect_stud(
     ctx: &CycleContext,
     out: &mut Vec<Move>,
 ) -> Result<(), CycleError> {
-    let l1 = p.q(218, "first side length")?;
-    let l2 = p.q(219, "second side length")?;
-    p.check(218, l1, EPS, f64::MAX, "greater than 0")?;
-    p.check(219, l2, EPS, f64::MAX, "greater than 0")?;
+    let (l1, l2) = rect_sides(p)?;
     let b1 = p.q(424, "workpiece blank side length 1")?;
     let b2 = p.q(425, "workpiece blank side length 2")?;
     p.check(424, b1, l1, f64::MAX, "at least the first side length Q218")?;
@@ -55,22 +52,7 @@ pub(super) fn rect_stud(
         f64::MAX,
         "at least the second side length Q219",
     )?;
-    let rc = p.check(
-        220,
-        p.q_or(220, 0.0),
-        0.0,
-        l1.min(l2) / 2.0,
-        "0 to half the shorter side",
-    )?;
-    let rot = p.check(224, p.q_or(224, 0.0), -360.0, 360.0, "-360 to 360")?;
-    let pos = p.choice(367, p.q_or(367, 0.0), 4, "0 to 4")?;
-    let shape = RoundedRect {
-        ha: l1 / 2.0,
-        hb: l2 / 2.0,
-        rc,
-    };
-    let turn = Frame::new([ctx.pos[0], ctx.pos[1]], rot);
-    let centre = turn.map(corner_offset(pos, shape.ha, shape.hb));
+    let (shape, rot, centre) = rect_outline(p, ctx, l1, l2)?;
     // Turned half a revolution so that the rings start on the negative first axis.
     let frame = Frame::new(centre, rot + 180.0);
     let extra = ((b1 - l1) / 2.0).max((b2 - l2) / 2.0);
@@ -130,34 +112,15 @@ pub(super) fn circ_stud(
 /// The common sequence.
 fn run(p: &Params, ctx: &CycleContext, stud: &Stud, out: &mut Vec<Move>) -> Result<(), CycleError> {
     let op = p.choice(215, p.q_or(215, 0.0), 2, "0, 1 or 2")?;
-    let depth = p.q(201, "depth")?;
-    if depth > 0.0 {
-        return Err(p.range(ParamKey::Q(201), depth, "negative (0 skips the cycle)"));
-    }
-    let surface = p.q(203, "workpiece surface coordinate")?;
-    let infeed = p.q(202, "plunging depth")?;
-    p.check(202, infeed, EPS, f64::MAX, "greater than 0")?;
-    let finish_infeed = p.check(338, p.q_or(338, 0.0), 0.0, f64::MAX, "0 or more")?;
-    let clear = p.check(200, p.q_or(200, 2.0), 0.0, f64::MAX, "0 or more")?;
-    let clear2 = p
-        .check(204, p.q_or(204, 50.0), 0.0, f64::MAX, "0 or more")?
-        .max(clear);
+    let h = p.heights()?;
     let side = p.check(368, p.q_or(368, 0.0), 0.0, f64::MAX, "0 or more")?;
     let overlap = p.check(370, p.q_or(370, 1.0), 0.1, 1.9999, "0.1 to 1.9999")?;
     let ccw = !pocket_ccw(p.q_or(351, 1.0), ctx.spindle);
-    let f_mill = p.feed_or(207, modal_feed(ctx))?;
-    let f_plunge = p.feed_or(206, f_mill)?;
-    let f_finish = p.feed_or(385, f_mill)?;
-    if depth == 0.0 {
+    let feeds = p.feeds(ctx)?;
+    if h.depth == 0.0 {
         return Ok(());
     }
-    let r = ctx.tool_radius;
-    if !(r.is_finite() && r > 0.0) {
-        return Err(CycleError::ToolRadius {
-            cycle: p.cycle,
-            radius: r,
-        });
-    }
+    let r = p.tool_radius(ctx)?;
     let step = overlap * 2.0 * r;
     let material = (stud.extra - side).max(0.0);
     let n = (material / step - 1e-9).ceil().clamp(1.0, 100_000.0);
@@ -171,35 +134,35 @@ fn run(p: &Params, ctx: &CycleContext, stud: &Stud, out: &mut Vec<Move>) -> Resu
         .collect();
     let fin = stud.shape.offset(r);
     let reach = rings.first().map_or(fin.ha, |g| g.ha).max(fin.ha);
-    let start = [reach + clear, 0.0];
+    let start = [reach + h.clear, 0.0];
 
     let mut path = Path::new(out, stud.frame, ctx.pos);
-    let top = surface + clear;
-    let safe = surface + clear2;
-    let bottom = surface + depth;
+    let top = h.surface + h.clear;
+    let safe = h.surface + h.clear2;
+    let bottom = h.surface + h.depth;
     if ctx.pos[2] < safe {
         path.line_abs([ctx.pos[0], ctx.pos[1], safe], CycleFeed::Rapid);
     }
     path.line(start, ctx.pos[2].max(safe), CycleFeed::Rapid);
     path.line(start, top, CycleFeed::Rapid);
-    let levels = steps_down(surface, bottom, infeed);
+    let levels = steps_down(h.surface, bottom, h.infeed);
     check_size(p.cycle, 10.0 * (levels.len() * (rings.len() + 1)) as f64)?;
-    let finish_levels = steps_down(surface, bottom, finish_infeed);
+    let finish_levels = steps_down(h.surface, bottom, h.finish_infeed);
     check_size(p.cycle, 10.0 * finish_levels.len() as f64)?;
     if op != 2 {
         for z in levels {
-            path.line(start, z, f_plunge);
+            path.line(start, z, feeds.plunge);
             for ring in &rings {
-                path.ring(*ring, ccw, z, f_mill);
+                path.ring(*ring, ccw, z, feeds.mill);
             }
-            path.line(start, z, f_mill);
+            path.line(start, z, feeds.mill);
         }
     }
     if op != 1 && (side > 0.0 || op == 2) {
         for z in finish_levels {
-            path.line(start, z, f_plunge);
-            path.ring(fin, ccw, z, f_finish);
-            path.line(start, z, f_finish);
+            path.line(start, z, feeds.plunge);
+            path.ring(fin, ccw, z, feeds.finish);
+            path.line(start, z, feeds.finish);
         }
     }
     path.line(start, top, CycleFeed::Rapid);
