@@ -12,8 +12,10 @@
 
 use crate::geom::AxisBounds;
 
-/// Slots in a planner's table: a few times the blends of one pass over a contour.
-pub const MEMO_SLOTS: usize = 8192;
+/// Slots in a planner's table (about 0.7 KiB each). The long CAM benchmark program finds
+/// 86 % of its look-ups here with 4096 slots, 90 % with 8192 (which plans no faster) and
+/// fewer with 2048 (which plans slower).
+pub const MEMO_SLOTS: usize = 4096;
 
 /// Values per key: P′'s polynomial coefficients (u¹…u⁵) of the nine pose indices, the
 /// smallest parameter speed, the two ends of the range of u and the moving axes.
