@@ -9,7 +9,7 @@
 //! arc, helix or spline part they are taken to a fine polyline through it plus the largest
 //! sagitta of that polyline, which can only overstate the distance.
 
-use super::Quintic;
+use super::{BoundsMemo, Quintic};
 use crate::geom::{Metric, PathPoint, Segment};
 use klar_interp::Pose;
 
@@ -36,12 +36,15 @@ pub struct ContourPart<'a> {
 
 /// The blend from `start` to `end` (poses with unit tangents and curvature vectors) if it
 /// keeps within `tolerance` of `contour`; with its largest deviation (a bound of it where the
-/// control points decided, the largest sampled one where the samples did).
+/// control points decided, the largest sampled one where the samples did). The curve's
+/// derivative bounds come from `memo` where a blend with the same derivatives was bounded
+/// before.
 pub fn blend_within(
     start: &PathPoint,
     end: &PathPoint,
     contour: &[ContourPart<'_>],
     tolerance: f64,
+    memo: &mut BoundsMemo,
 ) -> Option<(Quintic, f64)> {
     // The tolerance check needs only the curve's shape; the rest is computed once it passes.
     let mut curve = Quintic::shape(start, end)?;
@@ -50,7 +53,7 @@ pub fn blend_within(
         Some(w) => w,
         None => sampled_deviation(&curve, contour, limit)?,
     };
-    curve.finish()?;
+    curve.finish(memo)?;
     Some((curve, worst))
 }
 
@@ -518,11 +521,26 @@ mod tests {
             ))
         });
         // A band the curve leaves by half again: refused.
-        assert!(blend_within(&a, &b, &contour, truth / 1.5 / TOLERANCE_SHARE).is_none());
+        assert!(
+            blend_within(
+                &a,
+                &b,
+                &contour,
+                truth / 1.5 / TOLERANCE_SHARE,
+                &mut BoundsMemo::new(0)
+            )
+            .is_none()
+        );
         // A band twice as wide as the curve needs: kept, with a deviation it really has at
         // most.
-        let (_, worst) =
-            blend_within(&a, &b, &contour, 2.0 * truth / TOLERANCE_SHARE).expect("inside the band");
+        let (_, worst) = blend_within(
+            &a,
+            &b,
+            &contour,
+            2.0 * truth / TOLERANCE_SHARE,
+            &mut BoundsMemo::new(0),
+        )
+        .expect("inside the band");
         assert!(worst >= truth && worst <= 2.0 * truth, "{worst} vs {truth}");
     }
 

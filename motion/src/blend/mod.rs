@@ -8,9 +8,11 @@
 
 mod bounds;
 pub mod corner;
+pub mod memo;
 pub mod pool;
 pub mod quintic;
 
 pub use corner::{ContourPart, blend_within, distance_to_part};
+pub use memo::{BoundsMemo, MEMO_SLOTS};
 pub use pool::{BLEND_SLOTS, BlendPool};
 pub use quintic::Quintic;

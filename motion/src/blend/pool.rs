@@ -8,7 +8,7 @@
 //! ahead, no blend can be made: the caller stops exactly at that corner instead, and the
 //! pool counts it ([`BlendPool::refused`]).
 
-use super::Quintic;
+use super::{BoundsMemo, MEMO_SLOTS, Quintic};
 use std::sync::Arc;
 
 /// Blend curves a planner keeps slots for: blends of the committed path still ahead of
@@ -26,10 +26,13 @@ pub struct BlendPool {
     refused: u64,
     /// Blends stored so far.
     stored: u64,
+    /// Derivative bounds of the blends made so far, for blends that come again.
+    memo: BoundsMemo,
 }
 
 impl BlendPool {
-    /// A pool of `capacity` slots, all made now.
+    /// A pool of `capacity` slots, all made now, with a table of [`MEMO_SLOTS`] derivative
+    /// bounds.
     pub fn new(capacity: usize) -> BlendPool {
         BlendPool {
             slots: (0..capacity)
@@ -38,7 +41,13 @@ impl BlendPool {
             next: 0,
             refused: 0,
             stored: 0,
+            memo: BoundsMemo::new(MEMO_SLOTS),
         }
+    }
+
+    /// The table of derivative bounds the blends of this pool are made with.
+    pub fn memo(&mut self) -> &mut BoundsMemo {
+        &mut self.memo
     }
 
     /// Number of slots.

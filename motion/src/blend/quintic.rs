@@ -10,6 +10,7 @@
 //! safeguarded Newton steps).
 
 use super::bounds::{Exact, derivative_bounds};
+use super::memo::{BoundsMemo, MemoKey};
 use crate::geom::{AxisBounds, Metric, PathPoint, arclen};
 use klar_interp::Pose;
 
@@ -58,7 +59,7 @@ impl Quintic {
     /// the curve has a cusp.
     pub fn hermite(start: &PathPoint, end: &PathPoint) -> Option<Quintic> {
         let mut q = Quintic::shape(start, end)?;
-        q.finish()?;
+        q.finish(&mut BoundsMemo::new(0))?;
         Some(q)
     }
 
@@ -106,10 +107,11 @@ impl Quintic {
         })
     }
 
-    /// Completes a curve from [`Quintic::shape`]: refuses cusps, bounds the derivatives and
+    /// Completes a curve from [`Quintic::shape`]: refuses cusps, bounds the derivatives
+    /// (taken from `memo` where a blend with the same derivatives was bounded before) and
     /// tabulates the arc length.
-    pub(crate) fn finish(&mut self) -> Option<()> {
-        self.bounds = self.bounds_over(0.0, 1.0)?;
+    pub(crate) fn finish(&mut self, memo: &mut BoundsMemo) -> Option<()> {
+        self.bounds = self.bounds_over(0.0, 1.0, memo)?;
         self.speed2 = self.speed_squared();
         let mut table = [0.0; TABLE_INTERVALS + 1];
         self.intervals = arclen::fill_table_adaptive(&mut table, |u| self.speed(u));
@@ -249,21 +251,31 @@ impl Quintic {
     /// curve from path distance `from` to `to` (clamped to the curve); the whole curve's
     /// bounds where the part's cannot be had.
     pub fn bounds_between(&self, from: f64, to: f64) -> AxisBounds {
+        self.bounds_between_in(from, to, &mut BoundsMemo::new(0))
+    }
+
+    /// [`Quintic::bounds_between`], taking the bounds from `memo` where the same stretch of
+    /// a blend with the same derivatives was bounded before.
+    pub fn bounds_between_in(&self, from: f64, to: f64, memo: &mut BoundsMemo) -> AxisBounds {
         let (u0, u1) = (self.parameter_at(from), self.parameter_at(to));
         if u0 <= 0.0 && u1 >= 1.0 {
             return self.bounds;
         }
-        self.bounds_over(u0, u1.max(u0))
+        self.bounds_over(u0, u1.max(u0), memo)
             .map_or(self.bounds, |b| tighter(&b, &self.bounds))
     }
 
     /// Derivative bounds over u ∈ [u0, u1] ([`derivative_bounds`]); `None` where the curve
-    /// has a cusp there: the parameter speed must stay well away from zero.
-    fn bounds_over(&self, u0: f64, u1: f64) -> Option<AxisBounds> {
+    /// has a cusp there: the parameter speed must stay well away from zero. They depend on
+    /// the derivatives, the smallest speed and the range only: `memo` holds them by those.
+    fn bounds_over(&self, u0: f64, u1: f64, memo: &mut BoundsMemo) -> Option<AxisBounds> {
         let chord: [f64; 9] = std::array::from_fn(|i| self.to.0[i] - self.from.0[i]);
         let min_speed = MIN_PARAMETER_SPEED * Metric::Linear.norm(&chord);
-        derivative_bounds(&self.c, &self.moving, min_speed, (u0, u1), |u| {
-            self.exact(u)
+        let key = MemoKey::new(&self.c, &self.moving, min_speed, (u0, u1));
+        memo.get_or_compute(&key, || {
+            derivative_bounds(&self.c, &self.moving, min_speed, (u0, u1), |u| {
+                self.exact(u)
+            })
         })
     }
 

@@ -147,7 +147,7 @@ impl Planner {
             } = new;
             let is_element = matches!(shape, Shape::Element(_));
             // A blend's part has bounds of its own: computed once for both uses.
-            let bounds = shape.bounds(offset, length);
+            let bounds = shape.bounds(offset, length, self.blends.memo());
             let mut limits = self.limits_for(&shape, &bounds, offset, length);
             if is_element && !front.element.derate.is_none() {
                 limits = front.element.derate.apply(&limits);

@@ -49,7 +49,7 @@ use super::corner_stop::{
 use super::overlap::StopCorner;
 use super::run;
 use super::smooth::{Stencil, split_point};
-use crate::blend::{BlendPool, ContourPart, Quintic, blend_within};
+use crate::blend::{BlendPool, BoundsMemo, ContourPart, Quintic, blend_within};
 use crate::config::AxisLimits;
 use crate::geom::{AxisBounds, Line, Metric, PathPoint, Segment};
 use crate::limits::{Grip, Headroom, LimitError, PieceLimits, path_limits};
@@ -110,12 +110,13 @@ impl Shape {
     }
 
     /// Derivative bounds over the part from `offset` over `length`: a blend's part has
-    /// bounds of its own ([`Quintic::bounds_between`]), an element's are the whole
+    /// bounds of its own ([`Quintic::bounds_between_in`], from `memo` where the same part of
+    /// a blend with the same derivatives was bounded before), an element's are the whole
     /// element's.
-    pub(crate) fn bounds(&self, offset: f64, length: f64) -> AxisBounds {
+    pub(crate) fn bounds(&self, offset: f64, length: f64, memo: &mut BoundsMemo) -> AxisBounds {
         match self {
             Shape::Element(g) => g.bounds(),
-            Shape::Blend(q) => q.bounds_between(offset, offset + length),
+            Shape::Blend(q) => q.bounds_between_in(offset, offset + length, memo),
         }
     }
 }
@@ -626,7 +627,7 @@ fn try_corner(
                 to: dr,
             },
         ];
-        if let Some((curve, _)) = blend_within(&a, &b, &contour, tol) {
+        if let Some((curve, _)) = blend_within(&a, &b, &contour, tol, pool.memo()) {
             let length = curve.length();
             let feed = min_feed(cur.feed, next.feed);
             if theta > SPLIT_MAX_ANGLE && too_slow(&curve, length, feed, cur, next, limits) {

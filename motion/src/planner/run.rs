@@ -152,7 +152,7 @@ fn run_to(
         from: 0.0,
         to: upto,
     };
-    let (curve, _) = blend_within(start, &end, contour, tol)?;
+    let (curve, _) = blend_within(start, &end, contour, tol, pool.memo())?;
     let feed = rest[..=m]
         .iter()
         .fold(cur.feed, |f, w| min_feed(f, w.element.feed));
