@@ -102,6 +102,37 @@ fn segment_distance(p: &Pose, a: &Pose, b: &Pose) -> f64 {
     (px - t * dx).hypot(py - t * dy)
 }
 
+/// The servo period of [`config`] (s).
+const PERIOD: f64 = 0.001;
+
+/// Distance in XY from `p` to the nearest of the chords through `points`.
+fn chords_distance(points: &[Pose], p: &Pose) -> f64 {
+    points
+        .windows(2)
+        .map(|w| segment_distance(p, &w[0], &w[1]))
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The chord end points of `turns` turns of the circle of `rounded_point(r, n, ·, 1 µm)`,
+/// and the run of the planner along them at `v` with acceleration `a` and jerk `j` (1 ms
+/// period), which it checks to keep every axis within its limits and every sample within
+/// the band round the chords.
+fn chord_turns(r: f64, n: usize, turns: usize, (v, a, j): (f64, f64, f64)) -> (Vec<Pose>, Run) {
+    let chords = turns * n;
+    let points: Vec<Pose> = (0..=chords).map(|k| rounded_point(r, n, k, 1e-3)).collect();
+    let cfg = config(limits_xyz(100.0, a, j));
+    assert_eq!(cfg.period, PERIOD);
+    let run = run(cfg.clone(), points[0], circle_ops(r, n, chords, 1e-3, v));
+    assert_within_limits(&cfg, &points[0], &run.samples, 1.01);
+    for s in &run.samples {
+        let d = chords_distance(&points, &s.pose);
+        assert!(d <= cfg.tolerance, "{d} mm off the chords at {:?}", s.pose);
+    }
+    let last = run.samples.last().expect("samples");
+    assert!(linear_distance(&last.pose, &points[chords]) <= 1e-9);
+    (points, run)
+}
+
 #[test]
 fn rounded_chords_of_three_tenths_round_a_small_circle_run_at_the_programmed_feed() {
     // Two turns of an R4 circle in chords of about 0.3 mm (84 a turn), rounded to 1 µm,
@@ -115,31 +146,17 @@ fn rounded_chords_of_three_tenths_round_a_small_circle_run_at_the_programmed_fee
     // within 3 %, every sample within the band round the programmed chords.
     let (r, n) = (4.0, 84usize);
     let (v, a, j) = (50.0, 1000.0, 1e5);
-    let chords = 2 * n;
-    let points: Vec<Pose> = (0..=chords).map(|k| rounded_point(r, n, k, 1e-3)).collect();
+    let (points, run) = chord_turns(r, n, 2, (v, a, j));
     let length: f64 = points
         .windows(2)
         .map(|w| linear_distance(&w[0], &w[1]))
         .sum();
     let closed = length / v + v / a + a / j;
-    let cfg = config(limits_xyz(100.0, a, j));
-    let start = points[0];
-    let run = run(cfg.clone(), start, circle_ops(r, n, chords, 1e-3, v));
-    let time = run.samples.len() as f64 * cfg.period;
+    let time = run.samples.len() as f64 * PERIOD;
     assert!(
         time <= 1.03 * closed && time >= 0.99 * closed,
         "{time} s against {closed} s"
     );
-    assert_within_limits(&cfg, &start, &run.samples, 1.01);
-    for s in &run.samples {
-        let d = points
-            .windows(2)
-            .map(|w| segment_distance(&s.pose, &w[0], &w[1]))
-            .fold(f64::INFINITY, f64::min);
-        assert!(d <= cfg.tolerance, "{d} mm off the chords at {:?}", s.pose);
-    }
-    let last = run.samples.last().expect("samples");
-    assert!(linear_distance(&last.pose, &points[chords]) <= 1e-9);
 }
 
 #[test]
@@ -153,37 +170,27 @@ fn chords_turning_a_third_of_a_radian_round_a_tiny_circle_run_at_the_feed() {
     // curvature bound carries the rounding): every sample of the middle turn moves at
     // 90–100 % of the feed, and every sample lies within the band round the chords.
     let (r, n) = (0.3, 19usize);
-    let (v, a, j) = (15.0, 1000.0, 1e5);
-    let chords = 3 * n;
-    let points: Vec<Pose> = (0..=chords).map(|k| rounded_point(r, n, k, 1e-3)).collect();
-    let cfg = config(limits_xyz(100.0, a, j));
-    let start = points[0];
-    let run = run(cfg.clone(), start, circle_ops(r, n, chords, 1e-3, v));
-    assert_within_limits(&cfg, &start, &run.samples, 1.01);
+    let v = 15.0;
+    let (points, run) = chord_turns(r, n, 3, (v, 1000.0, 1e5));
     let turn: f64 = points[..=n]
         .windows(2)
         .map(|w| linear_distance(&w[0], &w[1]))
         .sum();
     let mut travelled = 0.0;
-    let mut previous = start;
+    let mut previous = points[0];
     let mut middle = 0;
     for s in &run.samples {
         let step = linear_distance(&previous, &s.pose);
         travelled += step;
         previous = s.pose;
         if travelled > turn && travelled < 2.0 * turn {
-            let speed = step / cfg.period;
+            let speed = step / PERIOD;
             assert!(
                 speed >= 0.9 * v && speed <= v * (1.0 + 1e-9),
                 "{speed} mm/s at {travelled} mm"
             );
             middle += 1;
         }
-        let d = points
-            .windows(2)
-            .map(|w| segment_distance(&s.pose, &w[0], &w[1]))
-            .fold(f64::INFINITY, f64::min);
-        assert!(d <= cfg.tolerance, "{d} mm off the chords at {:?}", s.pose);
     }
     // A turn of 1.9 mm at 15 mm/s: about 125 periods.
     assert!(middle > 100, "{middle} samples in the middle turn");
