@@ -228,7 +228,7 @@ fn sampled_deviation(curve: &Quintic, contour: &[ContourPart<'_>], limit: f64) -
     let cached = match cache {
         Some(slots) => {
             for (slot, part) in slots.iter_mut().zip(contour) {
-                *slot = Polyline::through(part);
+                slot.fill_through(part);
             }
             Some(&*slots)
         }
@@ -259,7 +259,7 @@ fn sampled_deviation(curve: &Quintic, contour: &[ContourPart<'_>], limit: f64) -
 }
 
 /// Distance (over X Y Z U V W) from `p` to a stretch of an element; never less than the
-/// true distance. Computes the chord points of [`Polyline::through`] one after the other,
+/// true distance. Computes the chord points of [`Polyline::fill_through`] one after the other,
 /// in the same order and so with the same result, without keeping them.
 pub fn distance_to_part(p: &Pose, part: &ContourPart<'_>) -> f64 {
     let (a, b) = (part.from.min(part.to), part.from.max(part.to));
@@ -308,25 +308,26 @@ impl Polyline {
         sagitta: 0.0,
     };
 
-    fn through(part: &ContourPart<'_>) -> Polyline {
+    /// Makes `self` the chords through `part`, in place (a polyline is kilobytes: building
+    /// it where it is kept saves copying it).
+    fn fill_through(&mut self, part: &ContourPart<'_>) {
         let (a, b) = (part.from.min(part.to), part.from.max(part.to));
-        let mut out = Polyline::EMPTY;
         match part.segment {
             Segment::Line(_) => {
-                out.points[0] = part.segment.position(a);
-                out.points[1] = part.segment.position(b);
-                out.count = 2;
+                self.points[0] = part.segment.position(a);
+                self.points[1] = part.segment.position(b);
+                self.count = 2;
+                self.sagitta = 0.0;
             }
             seg => {
                 let (h, sagitta) = chords_of(seg, a, b);
-                for (k, point) in out.points.iter_mut().enumerate() {
+                for (k, point) in self.points.iter_mut().enumerate() {
                     *point = seg.position(a + h * k as f64);
                 }
-                out.count = CURVE_CHORDS + 1;
-                out.sagitta = sagitta;
+                self.count = CURVE_CHORDS + 1;
+                self.sagitta = sagitta;
             }
         }
-        out
     }
 
     /// Distance from `p`, never less than the true distance from the stretch.
