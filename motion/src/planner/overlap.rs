@@ -431,7 +431,8 @@ impl Planner {
             // asks for it before each call gets `None` only at the end, as without overlap.
             // The look-ahead reaches far beyond the few dozen periods kept back.
             let collecting = self.overlap.phase != Phase::Idle;
-            let Some(step) = self.step(starved || collecting) else {
+            let next = self.step(starved || collecting);
+            if next.is_none() {
                 // The path ended (a departure that ends the program): what was kept back
                 // goes out, combined where it may be.
                 if collecting {
@@ -445,23 +446,29 @@ impl Planner {
                     }
                 }
                 return None;
+            }
+            // The step as planned goes out as it is (not moved out of its option and back
+            // in: a sample is hundreds of bytes, and this runs every servo period).
+            if self.overlap.phase == Phase::Idle {
+                if let Some(Step::Sample(sample)) = &next
+                    && let Some((at, corner)) = self.corner_close()
+                {
+                    self.overlap.phase = Phase::Braking { at, corner };
+                    self.overlap.tail.push(Kept {
+                        sample: *sample,
+                        distance: at - self.state.s,
+                        on_contour: self.on_contour(),
+                        limit: self.piece_limit(),
+                    });
+                    continue;
+                }
+                return next;
+            }
+            let Some(step) = next else {
+                return None;
             };
             match self.overlap.phase {
-                Phase::Idle => {
-                    if let Step::Sample(sample) = &step
-                        && let Some((at, corner)) = self.corner_close()
-                    {
-                        self.overlap.phase = Phase::Braking { at, corner };
-                        self.overlap.tail.push(Kept {
-                            sample: *sample,
-                            distance: at - self.state.s,
-                            on_contour: self.on_contour(),
-                            limit: self.piece_limit(),
-                        });
-                        continue;
-                    }
-                    return Some(step);
-                }
+                Phase::Idle => return Some(step),
                 Phase::Braking { at, corner } => match step {
                     Step::Sample(sample) if self.overlap.passed => {
                         let band = corner.band;
