@@ -271,13 +271,15 @@ pub fn distance_to_part(p: &Pose, part: &ContourPart<'_>) -> f64 {
         seg => {
             let (h, sagitta) = chords_of(seg, a, b);
             let mut before = seg.position(a);
+            // The nearest chord by squared distance: the root of the least square is the
+            // least root, bit for bit (the root is correctly rounded and never decreasing).
             let mut nearest = f64::INFINITY;
             for k in 1..=CURVE_CHORDS {
                 let next = seg.position(a + h * k as f64);
-                nearest = nearest.min(distance_to_chord(p, &before, &next));
+                nearest = nearest.min(squared_distance_to_chord(p, &before, &next));
                 before = next;
             }
-            nearest + sagitta
+            nearest.sqrt() + sagitta
         }
     }
 }
@@ -334,14 +336,21 @@ impl Polyline {
     fn distance(&self, p: &Pose) -> f64 {
         self.points[..self.count]
             .windows(2)
-            .map(|w| distance_to_chord(p, &w[0], &w[1]))
+            .map(|w| squared_distance_to_chord(p, &w[0], &w[1]))
             .fold(f64::INFINITY, f64::min)
+            .sqrt()
             + self.sagitta
     }
 }
 
 /// Distance from `p` to the straight chord from `a` to `b` over the linear axes.
 fn distance_to_chord(p: &Pose, a: &Pose, b: &Pose) -> f64 {
+    squared_distance_to_chord(p, a, b).sqrt()
+}
+
+/// The square of [`distance_to_chord`] (before its root): nearest chords are found by it,
+/// and only the nearest one's root is taken.
+fn squared_distance_to_chord(p: &Pose, a: &Pose, b: &Pose) -> f64 {
     let axes = Metric::Linear.axes();
     let (mut ab2, mut ap_ab) = (0.0, 0.0);
     for &i in axes {
@@ -360,7 +369,6 @@ fn distance_to_chord(p: &Pose, a: &Pose, b: &Pose) -> f64 {
             (p.0[i] - q).powi(2)
         })
         .sum::<f64>()
-        .sqrt()
 }
 
 #[cfg(test)]
