@@ -405,10 +405,13 @@ impl<'a> MachineChecks<'a> {
                 if planner.needs_input() {
                     break;
                 }
-                let Some(step) = planner.next_step() else {
+                // The step is looked at where the planner put it: a sample is hundreds of
+                // bytes, moved out of its option every servo period it would cost a copy.
+                let next = planner.next_step();
+                let Some(step) = &next else {
                     break;
                 };
-                if self.take(&step, report) {
+                if self.take(step, report) {
                     return;
                 }
             }
@@ -420,8 +423,12 @@ impl<'a> MachineChecks<'a> {
             return;
         };
         planner.finish();
-        while let Some(step) = self.planner.as_mut().and_then(Planner::next_step) {
-            if self.take(&step, report) {
+        loop {
+            let next = self.planner.as_mut().and_then(Planner::next_step);
+            let Some(step) = &next else {
+                break;
+            };
+            if self.take(step, report) {
                 break;
             }
         }
