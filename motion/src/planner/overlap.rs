@@ -447,30 +447,26 @@ impl Planner {
                 }
                 return None;
             }
-            // The step as planned goes out as it is (not moved out of its option and back
-            // in: a sample is hundreds of bytes, and this runs every servo period).
-            if self.overlap.phase == Phase::Idle {
-                if let Some(Step::Sample(sample)) = &next
-                    && let Some((at, corner)) = self.corner_close()
-                {
-                    self.overlap.phase = Phase::Braking { at, corner };
-                    self.overlap.tail.push(Kept {
-                        sample: *sample,
-                        distance: at - self.state.s,
-                        on_contour: self.on_contour(),
-                        limit: self.piece_limit(),
-                    });
-                    continue;
-                }
-                return next;
-            }
-            let Some(step) = next else {
-                return None;
-            };
+            // A step as planned goes out in its option as it came (a sample is hundreds of
+            // bytes, and this runs every servo period: no move out of the option and back).
             match self.overlap.phase {
-                Phase::Idle => return Some(step),
-                Phase::Braking { at, corner } => match step {
-                    Step::Sample(sample) if self.overlap.passed => {
+                Phase::Idle => {
+                    if let Some(Step::Sample(sample)) = &next
+                        && let Some((at, corner)) = self.corner_close()
+                    {
+                        self.overlap.phase = Phase::Braking { at, corner };
+                        self.overlap.tail.push(Kept {
+                            sample: *sample,
+                            distance: at - self.state.s,
+                            on_contour: self.on_contour(),
+                            limit: self.piece_limit(),
+                        });
+                        continue;
+                    }
+                    return next;
+                }
+                Phase::Braking { at, corner } => match next {
+                    Some(Step::Sample(sample)) if self.overlap.passed => {
                         let band = corner.band;
                         let within = self
                             .overlap
@@ -481,7 +477,7 @@ impl Planner {
                         self.overlap.phase = Phase::Departing { at, corner, within };
                         self.keep_departure(sample, at, &corner, within);
                     }
-                    Step::Sample(sample) if self.overlap.tail.len() < TAIL_SAMPLES => {
+                    Some(Step::Sample(sample)) if self.overlap.tail.len() < TAIL_SAMPLES => {
                         self.overlap.tail.push(Kept {
                             sample,
                             distance: at - self.state.s,
@@ -489,11 +485,13 @@ impl Planner {
                             limit: self.piece_limit(),
                         });
                     }
-                    other => self.overlap.give_out_as_planned(Some(other)),
+                    other => self.overlap.give_out_as_planned(other),
                 },
-                Phase::Departing { at, corner, within } => match step {
-                    Step::Sample(sample) => self.keep_departure(sample, at, &corner, within),
-                    event => self.end_overlap(&corner, Some(event)),
+                Phase::Departing { at, corner, within } => match next {
+                    Some(Step::Sample(sample)) => {
+                        self.keep_departure(sample, at, &corner, within);
+                    }
+                    event => self.end_overlap(&corner, event),
                 },
             }
         }
