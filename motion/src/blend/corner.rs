@@ -577,4 +577,52 @@ mod tests {
             }
         }
     }
+
+    #[test]
+    fn a_curved_parts_distance_is_its_nearest_chords_root_and_the_polylines_too() {
+        // Arc of radius 2 about (0, 2), a quarter turn from the origin; points inside,
+        // outside and off its ends.
+        let arc = Segment::Arc(
+            Arc::new(xy(0.0, 0.0), xy(2.0, 2.0), [0.0, 2.0], Plane::XY, 90.0)
+                .unwrap()
+                .unwrap(),
+        );
+        let part = ContourPart {
+            segment: &arc,
+            from: 0.3,
+            to: 2.5,
+        };
+        let mut line = Polyline::EMPTY;
+        line.fill_through(&part);
+        let (h, sagitta) = chords_of(&arc, 0.3, 2.5);
+        for p in [
+            xy(0.5, 0.3),
+            xy(1.9, 2.4),
+            xy(-1.0, 0.0),
+            xy(3.0, 3.0),
+            xy(0.0, 2.0),
+        ] {
+            // One root per chord, the least of them: what the squared search must match.
+            let roots = (1..=CURVE_CHORDS)
+                .map(|k| {
+                    let a = arc.position(0.3 + h * (k - 1) as f64);
+                    let b = arc.position(0.3 + h * k as f64);
+                    squared_distance_to_chord(&p, &a, &b).sqrt()
+                })
+                .fold(f64::INFINITY, f64::min)
+                + sagitta;
+            assert_eq!(
+                distance_to_part(&p, &part).to_bits(),
+                roots.to_bits(),
+                "{p:?}"
+            );
+            assert_eq!(line.distance(&p).to_bits(), roots.to_bits(), "{p:?}");
+            // And it is the distance from the arc (radius 2 about (0, 2)) within the sagitta
+            // for the points whose nearest arc point lies on the stretch.
+            let to_circle = (p.0[0].hypot(p.0[1] - 2.0) - 2.0).abs();
+            if p.0[0] > 0.0 && p.0[1] < 2.0 {
+                assert!((roots - to_circle).abs() <= 2.0 * sagitta + 1e-12, "{p:?}");
+            }
+        }
+    }
 }
