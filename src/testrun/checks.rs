@@ -110,15 +110,17 @@ impl<'a> MachineChecks<'a> {
     }
 
     pub(super) fn op(&mut self, op: Op, report: &mut TestRunReport) {
+        // The op's bounds, computed once for the envelope, the travel and the feed checks.
+        let bounds = op_bounds(&op.kind);
         if op.kind.is_motion() {
             report.motion_ops += 1;
-            self.widen(&op, report);
+            self.widen(bounds, report);
         }
-        self.travel_once(&op, report);
+        self.travel_once(&op, bounds, report);
         if let Err(d) = check_positioning(&op, &self.letters, &self.positioning, self.path) {
             report.errors.push(d);
         }
-        if let Some(w) = self.feed_warning(&op) {
+        if let Some(w) = self.feed_warning(&op, bounds) {
             report.warnings.push(w);
         }
         match &op.kind {
@@ -134,13 +136,13 @@ impl<'a> MachineChecks<'a> {
             OpKind::SpindleSync { .. } => {
                 report.motion_ops += 1;
                 report.geared_ops += 1;
-                self.widen(&op, report);
+                self.widen(bounds, report);
                 self.spindle_sync(&op, report);
             }
             OpKind::RigidTap { .. } => {
                 report.motion_ops += 1;
                 report.geared_ops += 1;
-                self.widen(&op, report);
+                self.widen(bounds, report);
                 self.rigid_tap(&op, report);
             }
             OpKind::RadiusComp { side } if *side != klar_interp::CompSide::Off => {
@@ -184,8 +186,9 @@ impl<'a> MachineChecks<'a> {
     /// reported at the block that sends it there; blocks that merely start from that
     /// position (their range reaches the reported point) are its consequences and stay
     /// silent until the axis is back within its travel.
-    fn travel_once(&mut self, op: &Op, report: &mut TestRunReport) {
-        let Some((lo, hi)) = op_bounds(&op.kind) else {
+    /// `bounds` are the op's (see [`op_bounds`]).
+    fn travel_once(&mut self, op: &Op, bounds: Option<(Pose, Pose)>, report: &mut TestRunReport) {
+        let Some((lo, hi)) = bounds else {
             return;
         };
         let mut said = Vec::new();
@@ -217,8 +220,9 @@ impl<'a> MachineChecks<'a> {
         }
     }
 
-    fn widen(&self, op: &Op, report: &mut TestRunReport) {
-        let Some((lo, hi)) = op_bounds(&op.kind) else {
+    /// Widens the report's envelope by an op's `bounds` (see [`op_bounds`]).
+    fn widen(&self, bounds: Option<(Pose, Pose)>, report: &mut TestRunReport) {
+        let Some((lo, hi)) = bounds else {
             return;
         };
         for (l, min, max) in &mut report.envelope {
@@ -319,8 +323,9 @@ impl<'a> MachineChecks<'a> {
         }
     }
 
-    /// A warning when a programmed feed is above what the moved axes allow.
-    fn feed_warning(&self, op: &Op) -> Option<Diagnostic> {
+    /// A warning when a programmed feed is above what the moved axes allow; `bounds` are the
+    /// op's (see [`op_bounds`]).
+    fn feed_warning(&self, op: &Op, bounds: Option<(Pose, Pose)>) -> Option<Diagnostic> {
         let (from, to, feed) = match &op.kind {
             OpKind::Line {
                 from,
@@ -335,7 +340,7 @@ impl<'a> MachineChecks<'a> {
             } => (from, to, *f),
             _ => return None,
         };
-        let (lo, hi) = op_bounds(&op.kind)?;
+        let (lo, hi) = bounds?;
         // Along a line each axis moves a fixed share of the path; an arc needs each of its
         // plane axes at full path speed somewhere, so the share is taken as 1 there.
         let length: f64 = match &op.kind {
@@ -405,10 +410,13 @@ impl<'a> MachineChecks<'a> {
                 if planner.needs_input() {
                     break;
                 }
-                let Some(step) = planner.next_step() else {
+                // The step is looked at where the planner put it: a sample is hundreds of
+                // bytes, moved out of its option every servo period it would cost a copy.
+                let next = planner.next_step();
+                let Some(step) = &next else {
                     break;
                 };
-                if self.take(&step, report) {
+                if self.take(step, report) {
                     return;
                 }
             }
@@ -420,8 +428,12 @@ impl<'a> MachineChecks<'a> {
             return;
         };
         planner.finish();
-        while let Some(step) = self.planner.as_mut().and_then(Planner::next_step) {
-            if self.take(&step, report) {
+        loop {
+            let next = self.planner.as_mut().and_then(Planner::next_step);
+            let Some(step) = &next else {
+                break;
+            };
+            if self.take(step, report) {
                 break;
             }
         }

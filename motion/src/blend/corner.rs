@@ -228,7 +228,7 @@ fn sampled_deviation(curve: &Quintic, contour: &[ContourPart<'_>], limit: f64) -
     let cached = match cache {
         Some(slots) => {
             for (slot, part) in slots.iter_mut().zip(contour) {
-                *slot = Polyline::through(part);
+                slot.fill_through(part);
             }
             Some(&*slots)
         }
@@ -259,7 +259,7 @@ fn sampled_deviation(curve: &Quintic, contour: &[ContourPart<'_>], limit: f64) -
 }
 
 /// Distance (over X Y Z U V W) from `p` to a stretch of an element; never less than the
-/// true distance. Computes the chord points of [`Polyline::through`] one after the other,
+/// true distance. Computes the chord points of [`Polyline::fill_through`] one after the other,
 /// in the same order and so with the same result, without keeping them.
 pub fn distance_to_part(p: &Pose, part: &ContourPart<'_>) -> f64 {
     let (a, b) = (part.from.min(part.to), part.from.max(part.to));
@@ -271,13 +271,15 @@ pub fn distance_to_part(p: &Pose, part: &ContourPart<'_>) -> f64 {
         seg => {
             let (h, sagitta) = chords_of(seg, a, b);
             let mut before = seg.position(a);
+            // The nearest chord by squared distance: the root of the least square is the
+            // least root, bit for bit (the root is correctly rounded and never decreasing).
             let mut nearest = f64::INFINITY;
             for k in 1..=CURVE_CHORDS {
                 let next = seg.position(a + h * k as f64);
-                nearest = nearest.min(distance_to_chord(p, &before, &next));
+                nearest = nearest.min(squared_distance_to_chord(p, &before, &next));
                 before = next;
             }
-            nearest + sagitta
+            nearest.sqrt() + sagitta
         }
     }
 }
@@ -308,39 +310,47 @@ impl Polyline {
         sagitta: 0.0,
     };
 
-    fn through(part: &ContourPart<'_>) -> Polyline {
+    /// Makes `self` the chords through `part`, in place (a polyline is kilobytes: building
+    /// it where it is kept saves copying it).
+    fn fill_through(&mut self, part: &ContourPart<'_>) {
         let (a, b) = (part.from.min(part.to), part.from.max(part.to));
-        let mut out = Polyline::EMPTY;
         match part.segment {
             Segment::Line(_) => {
-                out.points[0] = part.segment.position(a);
-                out.points[1] = part.segment.position(b);
-                out.count = 2;
+                self.points[0] = part.segment.position(a);
+                self.points[1] = part.segment.position(b);
+                self.count = 2;
+                self.sagitta = 0.0;
             }
             seg => {
                 let (h, sagitta) = chords_of(seg, a, b);
-                for (k, point) in out.points.iter_mut().enumerate() {
+                for (k, point) in self.points.iter_mut().enumerate() {
                     *point = seg.position(a + h * k as f64);
                 }
-                out.count = CURVE_CHORDS + 1;
-                out.sagitta = sagitta;
+                self.count = CURVE_CHORDS + 1;
+                self.sagitta = sagitta;
             }
         }
-        out
     }
 
     /// Distance from `p`, never less than the true distance from the stretch.
     fn distance(&self, p: &Pose) -> f64 {
         self.points[..self.count]
             .windows(2)
-            .map(|w| distance_to_chord(p, &w[0], &w[1]))
+            .map(|w| squared_distance_to_chord(p, &w[0], &w[1]))
             .fold(f64::INFINITY, f64::min)
+            .sqrt()
             + self.sagitta
     }
 }
 
 /// Distance from `p` to the straight chord from `a` to `b` over the linear axes.
 fn distance_to_chord(p: &Pose, a: &Pose, b: &Pose) -> f64 {
+    squared_distance_to_chord(p, a, b).sqrt()
+}
+
+/// The square of [`distance_to_chord`] (before its root): nearest chords are found by it,
+/// and only the nearest one's root is taken.
+fn squared_distance_to_chord(p: &Pose, a: &Pose, b: &Pose) -> f64 {
     let axes = Metric::Linear.axes();
     let (mut ab2, mut ap_ab) = (0.0, 0.0);
     for &i in axes {
@@ -359,7 +369,6 @@ fn distance_to_chord(p: &Pose, a: &Pose, b: &Pose) -> f64 {
             (p.0[i] - q).powi(2)
         })
         .sum::<f64>()
-        .sqrt()
 }
 
 #[cfg(test)]
@@ -565,6 +574,54 @@ mod tests {
             for i in 0..2 {
                 assert!((bezier(&left, t, i) - p.0[i]).abs() < 1e-14);
                 assert!((bezier(&right, t, i) - q.0[i]).abs() < 1e-14);
+            }
+        }
+    }
+
+    #[test]
+    fn a_curved_parts_distance_is_its_nearest_chords_root_and_the_polylines_too() {
+        // Arc of radius 2 about (0, 2), a quarter turn from the origin; points inside,
+        // outside and off its ends.
+        let arc = Segment::Arc(
+            Arc::new(xy(0.0, 0.0), xy(2.0, 2.0), [0.0, 2.0], Plane::XY, 90.0)
+                .unwrap()
+                .unwrap(),
+        );
+        let part = ContourPart {
+            segment: &arc,
+            from: 0.3,
+            to: 2.5,
+        };
+        let mut line = Polyline::EMPTY;
+        line.fill_through(&part);
+        let (h, sagitta) = chords_of(&arc, 0.3, 2.5);
+        for p in [
+            xy(0.5, 0.3),
+            xy(1.9, 2.4),
+            xy(-1.0, 0.0),
+            xy(3.0, 3.0),
+            xy(0.0, 2.0),
+        ] {
+            // One root per chord, the least of them: what the squared search must match.
+            let roots = (1..=CURVE_CHORDS)
+                .map(|k| {
+                    let a = arc.position(0.3 + h * (k - 1) as f64);
+                    let b = arc.position(0.3 + h * k as f64);
+                    squared_distance_to_chord(&p, &a, &b).sqrt()
+                })
+                .fold(f64::INFINITY, f64::min)
+                + sagitta;
+            assert_eq!(
+                distance_to_part(&p, &part).to_bits(),
+                roots.to_bits(),
+                "{p:?}"
+            );
+            assert_eq!(line.distance(&p).to_bits(), roots.to_bits(), "{p:?}");
+            // And it is the distance from the arc (radius 2 about (0, 2)) within the sagitta
+            // for the points whose nearest arc point lies on the stretch.
+            let to_circle = (p.0[0].hypot(p.0[1] - 2.0) - 2.0).abs();
+            if p.0[0] > 0.0 && p.0[1] < 2.0 {
+                assert!((roots - to_circle).abs() <= 2.0 * sagitta + 1e-12, "{p:?}");
             }
         }
     }

@@ -431,7 +431,8 @@ impl Planner {
             // asks for it before each call gets `None` only at the end, as without overlap.
             // The look-ahead reaches far beyond the few dozen periods kept back.
             let collecting = self.overlap.phase != Phase::Idle;
-            let Some(step) = self.step(starved || collecting) else {
+            let next = self.step(starved || collecting);
+            if next.is_none() {
                 // The path ended (a departure that ends the program): what was kept back
                 // goes out, combined where it may be.
                 if collecting {
@@ -445,10 +446,12 @@ impl Planner {
                     }
                 }
                 return None;
-            };
+            }
+            // A step as planned goes out in its option as it came (a sample is hundreds of
+            // bytes, and this runs every servo period: no move out of the option and back).
             match self.overlap.phase {
                 Phase::Idle => {
-                    if let Step::Sample(sample) = &step
+                    if let Some(Step::Sample(sample)) = &next
                         && let Some((at, corner)) = self.corner_close()
                     {
                         self.overlap.phase = Phase::Braking { at, corner };
@@ -460,10 +463,10 @@ impl Planner {
                         });
                         continue;
                     }
-                    return Some(step);
+                    return next;
                 }
-                Phase::Braking { at, corner } => match step {
-                    Step::Sample(sample) if self.overlap.passed => {
+                Phase::Braking { at, corner } => match next {
+                    Some(Step::Sample(sample)) if self.overlap.passed => {
                         let band = corner.band;
                         let within = self
                             .overlap
@@ -474,7 +477,7 @@ impl Planner {
                         self.overlap.phase = Phase::Departing { at, corner, within };
                         self.keep_departure(sample, at, &corner, within);
                     }
-                    Step::Sample(sample) if self.overlap.tail.len() < TAIL_SAMPLES => {
+                    Some(Step::Sample(sample)) if self.overlap.tail.len() < TAIL_SAMPLES => {
                         self.overlap.tail.push(Kept {
                             sample,
                             distance: at - self.state.s,
@@ -482,11 +485,13 @@ impl Planner {
                             limit: self.piece_limit(),
                         });
                     }
-                    other => self.overlap.give_out_as_planned(Some(other)),
+                    other => self.overlap.give_out_as_planned(other),
                 },
-                Phase::Departing { at, corner, within } => match step {
-                    Step::Sample(sample) => self.keep_departure(sample, at, &corner, within),
-                    event => self.end_overlap(&corner, Some(event)),
+                Phase::Departing { at, corner, within } => match next {
+                    Some(Step::Sample(sample)) => {
+                        self.keep_departure(sample, at, &corner, within);
+                    }
+                    event => self.end_overlap(&corner, event),
                 },
             }
         }
