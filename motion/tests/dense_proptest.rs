@@ -87,22 +87,6 @@ fn points(d: &Dense) -> Vec<Pose> {
     pts
 }
 
-/// Distance from `p` to the segment `a`–`b` (X Y Z).
-fn to_segment(p: &Pose, a: &Pose, b: &Pose) -> f64 {
-    let d: Vec<f64> = (0..3).map(|i| b.0[i] - a.0[i]).collect();
-    let w: Vec<f64> = (0..3).map(|i| p.0[i] - a.0[i]).collect();
-    let dd: f64 = d.iter().map(|x| x * x).sum();
-    let t = if dd > 0.0 {
-        (d.iter().zip(&w).map(|(x, y)| x * y).sum::<f64>() / dd).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    (0..3)
-        .map(|i| (w[i] - t * d[i]).powi(2))
-        .sum::<f64>()
-        .sqrt()
-}
-
 /// The chords through `pts` at `d`'s feed, and the planner configuration with its limits.
 fn program(d: &Dense, pts: &[Pose]) -> (Vec<Op>, klar_motion::PlannerConfig) {
     let ops = pts
@@ -148,7 +132,7 @@ fn in_band(
         let from = k.saturating_sub(4);
         let to = (k + reach).min(pts.len() - 1);
         let (best, dist) = (from..to)
-            .map(|i| (i, to_segment(&s.pose, &pts[i], &pts[i + 1])))
+            .map(|i| (i, segment_distance(&s.pose, &pts[i], &pts[i + 1])))
             .fold((k, f64::INFINITY), |m, x| if x.1 < m.1 { x } else { m });
         prop_assert!(
             dist <= cfg.tolerance + 1e-6,

@@ -37,18 +37,6 @@ fn stretch_time(length: f64, v: f64) -> f64 {
     length / v + ramp_time(v)
 }
 
-/// Distance in X Y Z from `p` to the segment from `a` to `b`.
-fn to_segment(p: &Pose, a: &Pose, b: &Pose) -> f64 {
-    let ab: Vec<f64> = (0..3).map(|i| b.0[i] - a.0[i]).collect();
-    let ap: Vec<f64> = (0..3).map(|i| p.0[i] - a.0[i]).collect();
-    let ab2: f64 = ab.iter().map(|x| x * x).sum();
-    let t = (ap.iter().zip(&ab).map(|(x, y)| x * y).sum::<f64>() / ab2).clamp(0.0, 1.0);
-    (0..3)
-        .map(|i| (ap[i] - t * ab[i]).powi(2))
-        .sum::<f64>()
-        .sqrt()
-}
-
 /// Two lines from the origin: `first` at `f1`, then on to `second` at `f2` (mm/s), on a
 /// machine with path tolerance `tol`. Returns the run after checking every axis's limits
 /// and the distance from the programmed contour, with the closest approach to the corner.
@@ -64,7 +52,8 @@ fn corner(first: Pose, f1: f64, second: Pose, f2: f64, tol: f64) -> (Run, f64) {
     assert_within_limits(&cfg, &p0, &r.samples, 1.01);
     let mut closest = f64::INFINITY;
     for s in &r.samples {
-        let off = to_segment(&s.pose, &p0, &first).min(to_segment(&s.pose, &first, &second));
+        let off =
+            segment_distance(&s.pose, &p0, &first).min(segment_distance(&s.pose, &first, &second));
         assert!(
             off <= tol + 1e-9,
             "tolerance {tol}: {off} mm off the contour"

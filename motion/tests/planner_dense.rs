@@ -94,14 +94,6 @@ fn rounded_chords_of_a_hundredth_run_at_the_programmed_feed() {
     }
 }
 
-/// Distance in XY from `p` to the segment from `a` to `b`.
-fn segment_distance(p: &Pose, a: &Pose, b: &Pose) -> f64 {
-    let (dx, dy) = (b.0[0] - a.0[0], b.0[1] - a.0[1]);
-    let (px, py) = (p.0[0] - a.0[0], p.0[1] - a.0[1]);
-    let t = ((px * dx + py * dy) / (dx * dx + dy * dy)).clamp(0.0, 1.0);
-    (px - t * dx).hypot(py - t * dy)
-}
-
 /// The servo period of [`config`] (s).
 const PERIOD: f64 = 0.001;
 

@@ -182,3 +182,20 @@ pub fn linear_distance(a: &Pose, b: &Pose) -> f64 {
         .sum::<f64>()
         .sqrt()
 }
+
+/// Distance in X Y Z from `p` to the segment from `a` to `b` (to `a` where the two are one
+/// point).
+pub fn segment_distance(p: &Pose, a: &Pose, b: &Pose) -> f64 {
+    let d: Vec<f64> = (0..3).map(|i| b.0[i] - a.0[i]).collect();
+    let w: Vec<f64> = (0..3).map(|i| p.0[i] - a.0[i]).collect();
+    let dd: f64 = d.iter().map(|x| x * x).sum();
+    let t = if dd > 0.0 {
+        (d.iter().zip(&w).map(|(x, y)| x * y).sum::<f64>() / dd).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    (0..3)
+        .map(|i| (w[i] - t * d[i]).powi(2))
+        .sum::<f64>()
+        .sqrt()
+}
