@@ -170,7 +170,7 @@ mod tests {
     #[test]
     fn a_narrow_bracket_is_halved_only_down_to_the_resolution() {
         // Cruising towards a stop 0.35 mm ahead: the highest safe cruise is about 21 mm/s
-        // (v²/2A + v·A/2J). In a bracket 0.3 mm/s wide round it the answer is that speed
+        // (v²/2A + v·A/2J and the period's travel). In a bracket 0.3 mm/s wide round it the answer is that speed
         // less at most the resolution, found with no more checks than halving 0.3 mm/s
         // down to the resolution takes.
         let w = stop_at(0.35);
@@ -185,7 +185,11 @@ mod tests {
             }
         }
         let best = lo;
-        assert!((20.0..22.0).contains(&best), "{best}");
+        // In closed form: after the period at u the state is 0.001·u on, and braking from u
+        // (above A²/J = 10 mm/s, so with a held deceleration) needs u²/2A + u·A/2J; both
+        // fill the 0.35 mm where u²/2000 + 0.006·u = 0.35.
+        let closed = (-0.006 + (0.006f64.powi(2) + 4.0 / 2000.0 * 0.35).sqrt()) * 1000.0;
+        assert!((best - closed).abs() <= 1e-6, "{best} against {closed}");
         let (low, high) = (best - 0.2, best + 0.1);
         let ((got, checks), _) = both(low, high, cruise, &w);
         assert!(got.v <= best + 1e-9, "{got:?} above {best}");
